@@ -1,0 +1,42 @@
+"""rotrod_core: a tip mass on a flexible rod standing on a rotating disk (no ROS).
+
+The rigid-flexible coupled model of Liu et al. (Appl. Math. Modell. 2014), with the
+exact Lagrangian torque coupling, in SI units throughout. Public contract:
+``RodParams``, ``Eq26Profile``, ``simulate``, ``dynamic_frequencies``,
+``critical_speed`` and the other names below.
+"""
+
+from .analysis import (
+    CampbellDiagram,
+    ModalAnalysis,
+    Mode,
+    campbell,
+    dynamic_frequencies,
+    modal_analysis,
+    static_deflection,
+)
+from .batch import BatchResult, simulate_batch
+from .critical import critical_speed, critical_speed_for_profile
+from .model import State
+from .params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
+from .profiles import (
+    ConstantProfile,
+    Eq26Profile,
+    Profile,
+    RampProfile,
+    StepProfile,
+    TableProfile,
+    make_profile,
+)
+from .result import SimulationResult
+from .simulate import simulate
+from .stepper import NonFiniteStateError, RealTimeStepper
+
+__all__ = [
+    'BatchResult', 'CampbellDiagram', 'ConstantProfile', 'DEFAULT_HUB_INERTIA',
+    'Eq26Profile', 'ModalAnalysis', 'Mode', 'NonFiniteStateError', 'Profile', 'RampProfile',
+    'RealTimeStepper', 'RodParams', 'SimulationResult', 'State', 'StepProfile',
+    'TableProfile', 'campbell', 'critical_speed', 'critical_speed_for_profile',
+    'disk_inertia', 'dynamic_frequencies', 'make_profile', 'modal_analysis',
+    'simulate', 'simulate_batch', 'static_deflection',
+]

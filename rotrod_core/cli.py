@@ -1,0 +1,224 @@
+"""The ``rotrod`` command line: offline runs, frequencies, critical speeds, the demo.
+
+rotrod simulate --profile eq26 -o run.csv
+rotrod simulate --drive torque --torque 0.01 --t-end 10 -o spin.npz
+rotrod frequencies --omega 0 1 2
+rotrod critical-speed --limit 0.003 --eccentricity 0.05 0.1 0.2
+rotrod demo
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .analysis import dynamic_frequencies, modal_analysis, static_deflection
+from .critical import STARTS, critical_speed, critical_speed_for_profile
+from .model import COUPLINGS
+from .params import RodParams
+from .profiles import PROFILES, TableProfile, make_profile
+from .simulate import simulate
+from .stages import format_stage_table, stage_extremes
+
+PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
+                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness')
+UNITS = {'mass': 'kg', 'rod_length': 'm', 'rod_diameter': 'm', 'youngs_modulus': 'Pa',
+         'eccentricity': 'm', 'hub_inertia': 'kg m^2', 'damping_ratio': '-',
+         'section_width': 'm', 'section_thickness': 'm'}
+
+
+def _finite(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError(f'must be finite: {text!r}')
+    return x
+
+
+def _add_params(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group('system parameters (SI units; defaults: the paper, Table 1)')
+    for name in PARAM_FIELDS:
+        g.add_argument('--' + name.replace('_', '-'), type=_finite, default=None,
+                       metavar=UNITS[name].upper().replace(' ', ''),
+                       help=f'{name.replace("_", " ")} [{UNITS[name]}]')
+    g.add_argument('--section', choices=('circular', 'rectangular'), default=None,
+                   help='rod cross-section (rectangular needs --section-width/-thickness)')
+
+
+def _params(args) -> RodParams:
+    given = {k: getattr(args, k) for k in PARAM_FIELDS if getattr(args, k) is not None}
+    if args.section:
+        given['section'] = args.section
+    return RodParams(**given)
+
+
+def _add_profile(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group('angular-velocity profile (velocity drive)')
+    g.add_argument('--profile', choices=tuple(PROFILES), default='eq26')
+    g.add_argument('--omega', type=_finite, default=2.0,
+                   help='peak/constant/final angular velocity [rad/s] (default 2)')
+    g.add_argument('--period', type=_finite, default=15.0, help='Eq. 26 period T [s]')
+    g.add_argument('--ramp-time', type=_finite, default=15.0, help='ramp duration [s]')
+    g.add_argument('--t-step', type=_finite, default=0.0, help='time of the step [s]')
+    g.add_argument('--table', type=Path, help='CSV of time [s], omega [rad/s] (profile table)')
+
+
+def _profile(args):
+    name = args.profile
+    if name == 'eq26':
+        return make_profile('eq26', period=args.period, omega_max=args.omega)
+    if name == 'constant':
+        return make_profile('constant', omega_value=args.omega)
+    if name == 'step':
+        return make_profile('step', omega_after=args.omega, t_step=args.t_step)
+    if name == 'ramp':
+        return make_profile('ramp', omega_max=args.omega, ramp_time=args.ramp_time)
+    if args.table is None:
+        raise ValueError('--profile table needs --table FILE')
+    return TableProfile.from_csv(args.table)
+
+
+def _initial(args) -> dict:
+    out = {}
+    for item in args.initial or []:
+        name, sep, value = item.partition('=')
+        if not sep:
+            raise ValueError(f'--initial takes NAME=VALUE, got {item!r}')
+        out[name.strip()] = _finite(value)
+    return out
+
+
+def cmd_simulate(args) -> int:
+    """Run one offline simulation and write CSV or NPZ."""
+    params = _params(args)
+    if args.output.suffix.lower() not in ('.csv', '.npz'):
+        raise ValueError(f'-o must end in .csv or .npz, got {str(args.output)!r}')
+    if not args.output.parent.exists():
+        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    initial = _initial(args)
+    if args.drive == 'velocity':
+        if args.torque is not None:
+            raise ValueError('--torque applies to --drive torque')
+        run = simulate(params, _profile(args), args.t_end, dt=args.dt, coupling=args.coupling,
+                       initial=initial)
+    else:
+        if args.torque is None:
+            raise ValueError('--drive torque needs --torque Q [N m]')
+        run = simulate(params, torque=args.torque, t_end=args.t_end, dt=args.dt,
+                       coupling=args.coupling, initial=initial)
+    run.save(args.output)
+    print(f'wrote {args.output} ({len(run.t)} samples, {args.drive} drive, '
+          f'{args.coupling} coupling): max u {1e3 * run.u.max():.6f} mm, '
+          f'v in [{1e3 * run.v.min():.6f}, {1e3 * run.v.max():.6f}] mm, '
+          f'final omega {run.omega[-1]:.6f} rad/s')
+    return 0
+
+
+def cmd_frequencies(args) -> int:
+    """Print the dynamic frequencies, modes and static deflection at constant speeds."""
+    params = _params(args)
+    print('omega [rad/s]  f1 [Hz]    f2 [Hz]    whirl (f1, f2)      stable  u_static [mm]')
+    for w in args.omega:
+        f1, f2 = dynamic_frequencies(params, w)
+        modes = modal_analysis(params, w)
+        whirl = ', '.join(m.whirl for m in modes.modes)
+        us, _ = static_deflection(params, w)
+        print(f'{w:13.4f}  {f1:9.6f}  {f2:9.6f}  {whirl:<18}  {str(modes.stable):<6}  '
+              f'{1e3 * us:.6f}')
+    return 0
+
+
+def cmd_critical(args) -> int:
+    """Print critical speeds (closed forms and, on request, numerical for a profile)."""
+    params = _params(args)
+    r0 = np.asarray(args.eccentricity_list if args.eccentricity_list else
+                    [params.eccentricity], dtype=float)
+    batch = params.replace(eccentricity=r0)
+    cols = {s: critical_speed(batch, args.limit, s) for s in STARTS}
+    if args.profile_numerical:
+        prof = _profile(args)
+        cols[f'{args.profile} (numerical)'] = critical_speed_for_profile(
+            batch, prof, args.limit, t_end=args.t_end, dt=args.dt)
+    print(f'critical angular velocity [rad/s] for a deflection limit of {args.limit} m')
+    print('r0 [m]     ' + ''.join(f'{k:>24}' for k in cols))
+    for i, r in enumerate(r0):
+        print(f'{r:<10.4f} ' + ''.join(f'{np.atleast_1d(v)[i]:24.6f}' for v in cols.values()))
+    return 0
+
+
+def cmd_demo(args) -> int:
+    """The paper's Eq. 26 scenario offline, with a per-stage summary."""
+    params = RodParams()
+    profile = make_profile('eq26', period=15.0, omega_max=2.0)
+    run = simulate(params, profile, 40.0, dt=1e-3)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = run.save(out / 'eq26_run.csv')
+    print('rotrod demo: the paper\'s spin-up scenario (Eq. 26, Table 1), offline core run')
+    print(format_stage_table(stage_extremes(run, profile.period)))
+    print(f'time history: {path}')
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``rotrod`` command."""
+    parser = argparse.ArgumentParser(prog='rotrod', description=__doc__.split('\n')[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest='command', required=True)
+
+    p = sub.add_parser('simulate', help='offline run to CSV or NPZ')
+    _add_params(p)
+    _add_profile(p)
+    p.add_argument('--drive', choices=('velocity', 'torque'), default='velocity')
+    p.add_argument('--coupling', choices=COUPLINGS, default='exact')
+    p.add_argument('--torque', type=_finite, help='hub torque [N m] (torque drive)')
+    p.add_argument('--initial', nargs='*', metavar='NAME=VALUE',
+                   help='initial state: u, v [m], du, dv [m/s], theta [rad], omega [rad/s]')
+    p.add_argument('--t-end', type=_finite, default=40.0, help='duration [s] (default 40)')
+    p.add_argument('--dt', type=_finite, default=1e-3, help='step [s] (default 0.001)')
+    p.add_argument('-o', '--output', type=Path, required=True, help='FILE.csv or FILE.npz')
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser('frequencies', help='dynamic frequencies at constant speeds (Eq. 28)')
+    _add_params(p)
+    p.add_argument('--omega', type=_finite, nargs='+', default=[0.0, 1.0, 2.0],
+                   help='angular velocities [rad/s]')
+    p.set_defaults(func=cmd_frequencies)
+
+    p = sub.add_parser('critical-speed', help='critical angular velocity vs eccentricity')
+    _add_params(p)
+    _add_profile(p)
+    p.add_argument('--limit', type=_finite, default=3e-3, help='deflection limit [m]')
+    p.add_argument('--eccentricities', dest='eccentricity_list', type=_finite, nargs='+',
+                   help='several r0 values [m]')
+    p.add_argument('--profile-numerical', action='store_true',
+                   help='also the numerical critical speed of --profile')
+    p.add_argument('--t-end', type=_finite, default=None, help='run length [s]')
+    p.add_argument('--dt', type=_finite, default=2e-3, help='step [s]')
+    p.set_defaults(func=cmd_critical)
+
+    p = sub.add_parser('demo', help="the paper's spin-up scenario with a stage summary")
+    p.add_argument('--out', default='out', help='output directory (default ./out)')
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``rotrod`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except (ValueError, OSError) as exc:
+        print(f'rotrod {args.command}: error: {exc}', file=sys.stderr)
+        return 2
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,407 @@
+"""Prescribed hub angular-velocity profiles w(t) (rad/s) with w'(t) and theta(t).
+
+Each profile evaluates on floats and numpy arrays. ``angle(t)`` is the exact integral
+of ``omega`` from 0 to t (rad). ``jumps()`` lists the instants at which omega jumps;
+integrators apply the physical jump there (the mass keeps its absolute
+velocity, see :func:`rotrod_core.model.omega_jump`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+
+def _finite(owner: str, name: str, value, *, positive=False, nonnegative=False) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f'{owner}.{name} must be a number, got {value!r}') from None
+    if isinstance(value, bool) or not math.isfinite(x):
+        raise ValueError(f'{owner}.{name} must be a finite number, got {value!r}')
+    if positive and not x > 0:
+        raise ValueError(f'{owner}.{name} must be > 0, got {value!r}')
+    if nonnegative and not x >= 0:
+        raise ValueError(f'{owner}.{name} must be >= 0, got {value!r}')
+    return x
+
+
+def _out(t, value):
+    """Return a float for scalar time input, an array otherwise."""
+    return float(value) if np.ndim(t) == 0 else value
+
+
+class Profile:
+    """Base class of angular-velocity profiles."""
+
+    def jumps(self) -> tuple:
+        """Instants where w jumps, as ``(time s, w before, w after)`` triples (t > 0)."""
+        return ()
+
+    def omega(self, t):
+        """Angular velocity w(t), rad/s."""
+        raise NotImplementedError
+
+    def omega_dot(self, t):
+        """Angular acceleration w'(t), rad/s^2 (0 at the instants of a jump)."""
+        raise NotImplementedError
+
+    def angle(self, t):
+        """Hub angle theta(t) = integral of w from 0 to t, rad."""
+        raise NotImplementedError
+
+    @property
+    def peak(self) -> float:
+        """Largest |w| the profile reaches, rad/s."""
+        raise NotImplementedError
+
+    @property
+    def end_time(self) -> float | None:
+        """Time after which the profile is constant, s (None if it never settles)."""
+        return None
+
+    def with_peak(self, omega_peak: float) -> Profile:
+        """The same shape scaled so that its peak |w| is ``omega_peak`` (rad/s)."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Eq26Profile(Profile):
+    """The paper's Eq. 26: smooth spin-up over T, hold T/3, smooth spin-down over T, rest.
+
+    0..T: w = W (t/T - sin(2 pi t/T) / 2pi); T..4T/3: w = W;
+    4T/3..7T/3: w = W (1 - s/T + sin(2 pi s/T) / 2pi), s = t - 4T/3; then w = 0.
+    w and w' are continuous and w' = 0 at every joint.
+
+    Attributes:
+        period: T, s (paper: 15 s).
+        omega_max: W, rad/s (paper: 2 rad/s).
+    """
+
+    period: float = 15.0
+    omega_max: float = 2.0
+
+    def __post_init__(self):
+        object.__setattr__(self, 'period', _finite('Eq26Profile', 'period', self.period,
+                                                   positive=True))
+        object.__setattr__(self, 'omega_max', _finite('Eq26Profile', 'omega_max',
+                                                      self.omega_max))
+
+    def _stages(self, t):
+        T = self.period
+        t = np.asarray(t, dtype=float)
+        s = t - 4.0 * T / 3.0
+        return T, t, s, (t <= T), (t > T) & (t <= 4 * T / 3), (t > 4 * T / 3) & (t <= 7 * T / 3)
+
+    def omega(self, t):
+        """Angular velocity w(t), rad/s."""
+        T, tt, s, up, hold, down = self._stages(t)
+        W, k = self.omega_max, 2.0 * math.pi / T
+        w = np.where(up, W * (tt / T - np.sin(k * tt) / (2 * math.pi)), 0.0)
+        w = np.where(hold, W, w)
+        w = np.where(down, W * (1.0 - s / T + np.sin(k * s) / (2 * math.pi)), w)
+        return _out(t, np.where(tt < 0, 0.0, w))
+
+    def omega_dot(self, t):
+        """Angular acceleration w'(t), rad/s^2."""
+        T, tt, s, up, _, down = self._stages(t)
+        W, k = self.omega_max, 2.0 * math.pi / T
+        a = np.where(up & (tt >= 0), W / T * (1.0 - np.cos(k * tt)), 0.0)
+        a = np.where(down, W / T * (np.cos(k * s) - 1.0), a)
+        return _out(t, a)
+
+    def angle(self, t):
+        """Hub angle theta(t), rad (closed form)."""
+        T, tt, s, up, hold, down = self._stages(t)
+        W, k = self.omega_max, 2.0 * math.pi / T
+        c = T / (4.0 * math.pi**2)
+        th = np.where(up, W * (tt**2 / (2 * T) + c * (np.cos(k * tt) - 1.0)), 0.0)
+        th = np.where(hold, W * (T / 2 + (tt - T)), th)
+        th = np.where(down, W * (5 * T / 6 + s - s**2 / (2 * T) + c * (1.0 - np.cos(k * s))), th)
+        th = np.where(tt > 7 * T / 3, W * 4 * T / 3, th)
+        return _out(t, np.where(tt < 0, 0.0, th))
+
+    @property
+    def peak(self) -> float:
+        """Largest |w|, rad/s."""
+        return abs(self.omega_max)
+
+    @property
+    def end_time(self) -> float:
+        """7T/3, s."""
+        return 7.0 * self.period / 3.0
+
+    def with_peak(self, omega_peak: float) -> Eq26Profile:
+        """Same timing, peak ``omega_peak`` rad/s."""
+        return dataclasses.replace(self, omega_max=omega_peak)
+
+
+@dataclass(frozen=True)
+class ConstantProfile(Profile):
+    """Constant angular velocity from t = 0 (the rotating frame starts at that speed).
+
+    Attributes:
+        omega_value: w, rad/s.
+    """
+
+    omega_value: float = 2.0
+
+    def __post_init__(self):
+        object.__setattr__(self, 'omega_value',
+                           _finite('ConstantProfile', 'omega', self.omega_value))
+
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        return _out(t, np.full(np.shape(t), self.omega_value))
+
+    def omega_dot(self, t):
+        """Zero, rad/s^2."""
+        return _out(t, np.zeros(np.shape(t)))
+
+    def angle(self, t):
+        """W t, rad."""
+        return _out(t, self.omega_value * np.asarray(t, dtype=float))
+
+    @property
+    def peak(self) -> float:
+        """|w|, rad/s."""
+        return abs(self.omega_value)
+
+    @property
+    def end_time(self) -> float:
+        """0 s: constant from the start."""
+        return 0.0
+
+    def with_peak(self, omega_peak: float) -> ConstantProfile:
+        """Constant ``omega_peak`` rad/s."""
+        return ConstantProfile(omega_peak)
+
+
+@dataclass(frozen=True)
+class StepProfile(Profile):
+    """A sudden change of angular velocity at ``t_step``.
+
+    w = omega_before for t < t_step, omega for t >= t_step. With t_step > 0 the jump
+    is applied physically (the mass keeps its absolute velocity: from rest this is the
+    "impulsive" start). With t_step = 0 the run starts in the frame already turning
+    at ``omega`` (from rest in that frame: the "step" start of MODEL.md).
+
+    Attributes:
+        omega_after: w after the step, rad/s.
+        t_step: time of the step, s (>= 0).
+        omega_before: w before the step, rad/s.
+    """
+
+    omega_after: float = 2.0
+    t_step: float = 0.0
+    omega_before: float = 0.0
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        set_(self, 'omega_after', _finite('StepProfile', 'omega', self.omega_after))
+        set_(self, 't_step', _finite('StepProfile', 't_step', self.t_step, nonnegative=True))
+        set_(self, 'omega_before', _finite('StepProfile', 'omega_before', self.omega_before))
+
+    def jumps(self) -> tuple:
+        """The step, when it happens after the start and changes w."""
+        if self.t_step > 0 and self.omega_after != self.omega_before:
+            return ((self.t_step, self.omega_before, self.omega_after),)
+        return ()
+
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        tt = np.asarray(t, dtype=float)
+        return _out(t, np.where(tt < self.t_step, self.omega_before, self.omega_after))
+
+    def omega_dot(self, t):
+        """Zero away from the step, rad/s^2."""
+        return _out(t, np.zeros(np.shape(t)))
+
+    def angle(self, t):
+        """Piecewise linear hub angle, rad."""
+        tt = np.asarray(t, dtype=float)
+        before = self.omega_before * np.minimum(tt, self.t_step)
+        return _out(t, before + self.omega_after * np.maximum(tt - self.t_step, 0.0))
+
+    @property
+    def peak(self) -> float:
+        """max(|omega_before|, |omega_after|), rad/s."""
+        return max(abs(self.omega_after), abs(self.omega_before))
+
+    @property
+    def end_time(self) -> float:
+        """t_step, s."""
+        return self.t_step
+
+    def with_peak(self, omega_peak: float) -> StepProfile:
+        """Both levels scaled by omega_peak / peak."""
+        if self.peak == 0:
+            return dataclasses.replace(self, omega_after=omega_peak)
+        scale = omega_peak / self.peak
+        return dataclasses.replace(self, omega_after=self.omega_after * scale,
+                                   omega_before=self.omega_before * scale)
+
+
+@dataclass(frozen=True)
+class RampProfile(Profile):
+    """Linear ramp from rest to ``omega_max`` over ``ramp_time``, starting at ``t_start``.
+
+    w is continuous; w' is constant (omega_max / ramp_time) during the ramp.
+
+    Attributes:
+        omega_max: final angular velocity, rad/s.
+        ramp_time: duration of the ramp, s (> 0).
+        t_start: start of the ramp, s (>= 0).
+    """
+
+    omega_max: float = 2.0
+    ramp_time: float = 15.0
+    t_start: float = 0.0
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        set_(self, 'omega_max', _finite('RampProfile', 'omega_max', self.omega_max))
+        set_(self, 'ramp_time', _finite('RampProfile', 'ramp_time', self.ramp_time,
+                                        positive=True))
+        set_(self, 't_start', _finite('RampProfile', 't_start', self.t_start, nonnegative=True))
+
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        tt = np.asarray(t, dtype=float)
+        frac = np.clip((tt - self.t_start) / self.ramp_time, 0.0, 1.0)
+        return _out(t, self.omega_max * frac)
+
+    def omega_dot(self, t):
+        """omega_max / ramp_time during the ramp, else 0, rad/s^2."""
+        tt = np.asarray(t, dtype=float)
+        on = (tt >= self.t_start) & (tt < self.t_start + self.ramp_time)
+        return _out(t, np.where(on, self.omega_max / self.ramp_time, 0.0))
+
+    def angle(self, t):
+        """Hub angle, rad."""
+        tt = np.asarray(t, dtype=float)
+        tau = np.clip(tt - self.t_start, 0.0, self.ramp_time)
+        after = np.maximum(tt - self.t_start - self.ramp_time, 0.0)
+        return _out(t, self.omega_max * (tau**2 / (2 * self.ramp_time) + after))
+
+    @property
+    def peak(self) -> float:
+        """|omega_max|, rad/s."""
+        return abs(self.omega_max)
+
+    @property
+    def end_time(self) -> float:
+        """End of the ramp, s."""
+        return self.t_start + self.ramp_time
+
+    def with_peak(self, omega_peak: float) -> RampProfile:
+        """Same timing, final speed ``omega_peak``."""
+        return dataclasses.replace(self, omega_max=omega_peak)
+
+
+class TableProfile(Profile):
+    """A user table of (time, omega) points, interpolated smoothly (monotone cubic, PCHIP).
+
+    PCHIP keeps w and w' continuous and never overshoots the tabulated values. Before
+    the first point and after the last, w holds the end value.
+
+    Args:
+        times: strictly increasing times, s (at least 2, the first >= 0).
+        omegas: angular velocities at those times, rad/s.
+    """
+
+    def __init__(self, times, omegas):
+        try:
+            t = np.asarray(times, dtype=float).ravel()
+            w = np.asarray(omegas, dtype=float).ravel()
+        except (TypeError, ValueError):
+            raise ValueError('TableProfile: times and omegas must be numbers') from None
+        if t.size < 2 or t.size != w.size:
+            raise ValueError(f'TableProfile needs >= 2 (time, omega) pairs of equal length, '
+                             f'got {t.size} times and {w.size} omegas')
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(w))):
+            raise ValueError('TableProfile: times and omegas must be finite')
+        if t[0] < 0 or np.any(np.diff(t) <= 0):
+            raise ValueError('TableProfile: times must start at >= 0 and increase strictly')
+        self.times, self.omegas = t, w
+        self._w = PchipInterpolator(t, w, extrapolate=False)
+        self._dw = self._w.derivative()
+        self._theta = self._w.antiderivative()
+
+    def __repr__(self):
+        return f'TableProfile({len(self.times)} points, {self.times[0]}..{self.times[-1]} s)'
+
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        tt = np.clip(np.asarray(t, dtype=float), self.times[0], self.times[-1])
+        return _out(t, self._w(tt))
+
+    def omega_dot(self, t):
+        """Angular acceleration, rad/s^2 (0 outside the table)."""
+        tt = np.asarray(t, dtype=float)
+        inside = (tt >= self.times[0]) & (tt <= self.times[-1])
+        d = self._dw(np.clip(tt, self.times[0], self.times[-1]))
+        return _out(t, np.where(inside, d, 0.0))
+
+    def angle(self, t):
+        """Hub angle, rad."""
+        tt = np.asarray(t, dtype=float)
+        t0, t1 = self.times[0], self.times[-1]
+        head = self.omegas[0] * np.minimum(tt, t0)
+        mid = self._theta(np.clip(tt, t0, t1))
+        tail = self.omegas[-1] * np.maximum(tt - t1, 0.0)
+        return _out(t, head + mid + tail)
+
+    @property
+    def peak(self) -> float:
+        """Largest |w| (PCHIP does not overshoot the table), rad/s."""
+        return float(np.max(np.abs(self.omegas)))
+
+    @property
+    def end_time(self) -> float:
+        """Last table time, s."""
+        return float(self.times[-1])
+
+    def with_peak(self, omega_peak: float) -> TableProfile:
+        """Omegas scaled so the largest |w| is ``omega_peak``."""
+        scale = omega_peak / self.peak if self.peak > 0 else 0.0
+        return TableProfile(self.times, self.omegas * scale)
+
+    @classmethod
+    def from_csv(cls, path) -> TableProfile:
+        """Read a two-column CSV (time s, omega rad/s); a header line is allowed."""
+        try:
+            data = np.genfromtxt(path, delimiter=',', dtype=float, comments='#')
+        except OSError as exc:
+            raise ValueError(f'cannot read profile table {path}: {exc}') from None
+        data = np.atleast_2d(data)
+        data = data[~np.all(np.isnan(data), axis=1)]
+        if data.ndim != 2 or data.shape[1] != 2:
+            raise ValueError(f'profile table {path} must have two columns: time, omega')
+        return cls(data[:, 0], data[:, 1])
+
+
+PROFILES = {
+    'eq26': Eq26Profile,
+    'constant': ConstantProfile,
+    'step': StepProfile,
+    'ramp': RampProfile,
+    'table': TableProfile,
+}
+
+
+def make_profile(name: str, **kwargs: Any) -> Profile:
+    """Build a profile by name: eq26, constant, step, ramp, table (keyword arguments)."""
+    try:
+        cls = PROFILES[name]
+    except KeyError:
+        raise ValueError(f'unknown profile {name!r}; expected one of {tuple(PROFILES)}') from None
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:
+        raise ValueError(f'bad arguments for profile {name!r}: {exc}') from None

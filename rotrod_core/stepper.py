@@ -1,0 +1,140 @@
+"""Real-time fixed-step integrator: holds the state and advances it one step at a time."""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+
+from . import model
+from .model import COUPLINGS, Coefficients, State, make_state
+from .params import RodParams
+from .rk4 import rk4_step
+
+
+class NonFiniteStateError(FloatingPointError):
+    """A step produced a non-finite state; the stepper kept its last good state."""
+
+
+def _finite_number(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f'{name} must be a number, got {value!r}') from None
+    if not math.isfinite(x):
+        raise ValueError(f'{name} must be finite, got {value!r}')
+    return x
+
+
+def check_coupling(params: RodParams, coupling: str) -> None:
+    """Raise ValueError for an unknown coupling, or the exact one with J = 0."""
+    if coupling not in COUPLINGS:
+        raise ValueError(f'coupling must be one of {COUPLINGS}, got {coupling!r}')
+    if coupling == 'exact' and not (params.hub_inertia > 0):
+        raise ValueError('the exact coupling needs hub_inertia > 0 (its 3x3 system has '
+                         'determinant m^2 J); use a disk inertia or coupling="paper"')
+
+
+class RealTimeStepper:
+    """Classical RK4 at a fixed step ``dt`` under the current command.
+
+    Velocity drive: :meth:`step_velocity` with the hub's angular acceleration over the
+    step (w follows linearly); a sudden change of w goes through :meth:`jump_omega`
+    (physical: the mass keeps its absolute velocity). Torque drive: :meth:`step_torque`
+    with the hub torque; the rotation is free and coupled to the rod (``coupling``).
+
+    A step that would produce a non-finite state raises :class:`NonFiniteStateError`
+    and leaves the state untouched.
+
+    Args:
+        params: one system (not a batch).
+        dt: step, s.
+        coupling: ``'exact'`` (Lagrangian, needs J > 0) or ``'paper'`` (Eq. 23 + J w').
+        initial: initial state by name (u, v, du, dv, theta, omega); others zero.
+    """
+
+    def __init__(self, params: RodParams, dt: float = 1e-3, coupling: str = 'exact',
+                 initial: dict | None = None):
+        if params.is_batch:
+            raise ValueError('RealTimeStepper simulates one system; got a batch of RodParams')
+        self.dt = _finite_number('dt', dt)
+        if not self.dt > 0:
+            raise ValueError(f'dt must be > 0, got {dt!r}')
+        check_coupling(params, coupling)
+        self.params = params
+        self.coupling = coupling
+        self._co = Coefficients.from_params(params)
+        self._velocity_rates = partial(model.velocity_drive_rates, self._co)
+        self._torque_rates = partial(model.torque_drive_rates, self._co, coupling=coupling)
+        self.reset(initial)
+
+    def reset(self, initial: dict | None = None) -> None:
+        """Return to t = 0 and the given initial state (default: at rest, undeflected)."""
+        self._state = make_state(initial)
+        self.time = 0.0
+        self.omega_dot = 0.0
+        self.torque = model.hub_torque(self._co, self._state, 0.0, self.coupling)
+
+    @property
+    def state(self) -> State:
+        """Current state (u, v, du, dv, theta, omega), SI units."""
+        return self._state
+
+    @property
+    def coefficients(self) -> Coefficients:
+        """The equations' coefficients for these parameters."""
+        return self._co
+
+    def _accept(self, new: tuple) -> State:
+        if not all(math.isfinite(x) for x in new):
+            raise NonFiniteStateError(
+                f'step at t={self.time:.6f} s gave a non-finite state {new}; state kept')
+        self._state = State(*new)
+        self.time += self.dt
+        return self._state
+
+    def step_velocity(self, omega_dot: float = 0.0) -> State:
+        """Advance one step with constant hub angular acceleration ``omega_dot`` (rad/s^2).
+
+        Afterwards :attr:`torque` is the hub torque the drive must supply (N m).
+        """
+        wd = _finite_number('omega_dot', omega_dot)
+        new = rk4_step(self._velocity_rates, self._state, self.dt, wd, wd, wd)
+        state = self._accept(new)
+        self.omega_dot = wd
+        self.torque = model.hub_torque(self._co, state, wd, self.coupling)
+        return state
+
+    def step_torque(self, torque: float, torque_end: float | None = None) -> State:
+        """Advance one step under the hub torque (N m), linear to ``torque_end`` if given."""
+        q0 = _finite_number('torque', torque)
+        q1 = q0 if torque_end is None else _finite_number('torque_end', torque_end)
+        new = rk4_step(self._torque_rates, self._state, self.dt, q0, 0.5 * (q0 + q1), q1)
+        state = self._accept(new)
+        self.torque = q1
+        self.omega_dot = model.hub_angular_acceleration(self._co, state, q1, self.coupling)
+        return state
+
+    def jump_omega(self, omega: float) -> State:
+        """Change the hub's angular velocity instantly to ``omega`` (rad/s), physically."""
+        w = _finite_number('omega', omega)
+        self._state = model.omega_jump(self._co, self._state, w)
+        return self._state
+
+    def set_state(self, **values) -> State:
+        """Overwrite some state components by name (validated; others kept)."""
+        self._state = make_state({**self._state._asdict(), **values})
+        return self._state
+
+    def inertial_position(self) -> tuple:
+        """Position (x, y) of the mass in the inertial frame, m."""
+        s = self._state
+        x, y = model.inertial_position(self._co, s.u, s.v, s.theta)
+        return float(x), float(y)
+
+    def energy(self) -> float:
+        """Total mechanical energy of the current state, J."""
+        return float(model.energy(self._co, self._state))
+
+    def angular_momentum(self) -> float:
+        """Angular momentum about the axis of the current state, kg m^2/s."""
+        return float(model.angular_momentum(self._co, self._state))

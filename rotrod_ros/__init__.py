@@ -1,0 +1,1 @@
+"""rotrod_ros: thin rclpy nodes over rotrod_core."""
