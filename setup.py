@@ -40,6 +40,5 @@ setup(
     zip_safe=True,
     maintainer='rotrod developers',
     maintainer_email='dev@rotrod.invalid',
-    tests_require=['pytest'],
     entry_points={'console_scripts': CONSOLE_SCRIPTS},
 )

@@ -126,7 +126,8 @@ def modal_analysis(params: RodParams, omega: float) -> ModalAnalysis:
         else:
             whirl = 'none'
         mag = abs(lam[i])
-        modes.append(Mode(frequency=float(abs(lam[i].imag) / TWO_PI), growth_rate=float(lam[i].real),
+        modes.append(Mode(frequency=float(abs(lam[i].imag) / TWO_PI),
+                          growth_rate=float(lam[i].real),
                           damping_ratio=float(-lam[i].real / mag) if mag else 0.0,
                           whirl=whirl, eigenvalue=complex(lam[i])))
     modes.sort(key=lambda m: m.frequency)

@@ -31,6 +31,11 @@ def _finite(owner: str, name: str, value, *, positive=False, nonnegative=False) 
     return x
 
 
+def _rescaled(value: float, omega_peak: float) -> float:
+    """``value`` scaled to magnitude ``omega_peak``, keeping its sign (+ if zero)."""
+    return math.copysign(float(omega_peak), value) if value else float(omega_peak)
+
+
 def _out(t, value):
     """Return a float for scalar time input, an array otherwise."""
     return float(value) if np.ndim(t) == 0 else value
@@ -137,8 +142,8 @@ class Eq26Profile(Profile):
         return 7.0 * self.period / 3.0
 
     def with_peak(self, omega_peak: float) -> Eq26Profile:
-        """Same timing, peak ``omega_peak`` rad/s."""
-        return dataclasses.replace(self, omega_max=omega_peak)
+        """Same timing, peak |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
 @dataclass(frozen=True)
@@ -178,8 +183,8 @@ class ConstantProfile(Profile):
         return 0.0
 
     def with_peak(self, omega_peak: float) -> ConstantProfile:
-        """Constant ``omega_peak`` rad/s."""
-        return ConstantProfile(omega_peak)
+        """Constant |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        return ConstantProfile(_rescaled(self.omega_value, omega_peak))
 
 
 @dataclass(frozen=True)
@@ -300,8 +305,8 @@ class RampProfile(Profile):
         return self.t_start + self.ramp_time
 
     def with_peak(self, omega_peak: float) -> RampProfile:
-        """Same timing, final speed ``omega_peak``."""
-        return dataclasses.replace(self, omega_max=omega_peak)
+        """Same timing, final |w| ``omega_peak`` (same sense of rotation)."""
+        return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
 class TableProfile(Profile):

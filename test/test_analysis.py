@@ -1,0 +1,174 @@
+"""Frequencies, stability and critical speeds against closed forms and simulations."""
+
+import math
+
+import numpy as np
+import pytest
+from reference import R0, W0, impulsive_start, step_start
+
+from rotrod_core import (
+    ConstantProfile,
+    RampProfile,
+    RodParams,
+    StepProfile,
+    campbell,
+    critical_speed,
+    critical_speed_for_profile,
+    dynamic_frequencies,
+    modal_analysis,
+    simulate,
+    static_deflection,
+)
+from rotrod_core.expm import expm_batch
+
+RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)
+
+
+def test_eq28_at_2_rad_s():
+    f1, f2 = dynamic_frequencies(RodParams(), 2.0)
+    assert f1 == pytest.approx((W0 - 2) / (2 * math.pi), rel=1e-12)
+    assert f2 == pytest.approx((W0 + 2) / (2 * math.pi), rel=1e-12)
+    assert (round(f1, 4), round(f2, 4)) == (1.6131, 2.2497)
+    f1, f2 = dynamic_frequencies(RodParams(), np.array([0.0, W0]))
+    assert f1[0] == f2[0] == pytest.approx(W0 / (2 * math.pi))
+    assert f1[1] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize('w', [0.0, 1.0, 2.0, 6.0, 11.0, 15.0])
+def test_eq28_equals_eigenvalues(w):
+    modes = modal_analysis(RodParams(), w)
+    expected = sorted([abs(W0 - w), W0 + w])
+    assert np.allclose(modes.frequencies, np.array(expected) / (2 * math.pi), rtol=1e-10)
+    assert modes.stable
+    if 0 < w < W0:
+        assert [m.whirl for m in modes.modes] == ['forward', 'backward']
+    if w > W0:   # the slow mode whirls backwards in the rotating frame above w0
+        assert [m.whirl for m in modes.modes] == ['backward', 'backward']
+
+
+@pytest.mark.parametrize('w', [0.5, 2.0, 6.0])
+def test_eq28_equals_the_spectrum_of_a_simulated_response(w):
+    """FFT of z = u + i v: forward whirl at +f1, backward at -f2 (MODEL.md)."""
+    dt, t_end = 5e-3, 200.0
+    run = simulate(RodParams(), ConstantProfile(w), t_end, dt=dt)
+    z = run.u + 1j * run.v
+    z = z - z.mean()
+    n = len(z)
+    win = np.hanning(n)
+    spec = np.abs(np.fft.fft(z * win))
+    freqs = np.fft.fftfreq(n, dt)
+
+    def peak(sign):
+        k = np.argmax(np.where(sign * freqs > 0.2, spec, 0))
+        a, b, c = np.log(spec[k - 1:k + 2])
+        return freqs[k] + 0.5 * (a - c) / (a - 2 * b + c) * (freqs[1] - freqs[0])
+
+    f1, f2 = dynamic_frequencies(RodParams(), w)
+    assert peak(+1) == pytest.approx(f1, rel=1e-3)
+    assert -peak(-1) == pytest.approx(f2, rel=1e-3)
+
+
+def test_static_deflection_at_2_rad_s():
+    u, v = static_deflection(RodParams(), 2.0)
+    assert u == pytest.approx(0.3 * 4 * R0 / (0.3 * W0**2 - 1.2), rel=1e-12)
+    assert u == pytest.approx(2.792e-3, rel=1e-3) and v == 0.0
+    assert static_deflection(RodParams(), W0)[0] == math.inf
+
+
+def test_rectangular_rod_is_unstable_exactly_between_its_natural_frequencies():
+    wa, wb = sorted([RECT.natural_frequency_radial, RECT.natural_frequency_tangential])
+    c = campbell(RECT, np.linspace(0, 30, 121))
+    assert len(c.unstable_bands) == 1
+    lo, hi = c.unstable_bands[0]
+    assert lo == pytest.approx(wa, rel=1e-8) and hi == pytest.approx(wb, rel=1e-8)
+    assert modal_analysis(RECT, 0.5 * (wa + wb)).max_growth_rate > 0
+    assert modal_analysis(RECT, 0.99 * wa).stable and modal_analysis(RECT, 1.01 * wb).stable
+
+
+def test_unstable_band_grows_in_simulation_at_the_eigen_rate():
+    w = 21.0
+    p = RECT.replace(eccentricity=0.0)
+    rate = modal_analysis(p, w).max_growth_rate
+    run = simulate(p, ConstantProfile(w), 4.0, dt=1e-3, initial={'u': 1e-9})
+    assert modal_analysis(p, w).modes[0].whirl == 'none'    # a real pair: divergence
+    d = run.deflection
+    k1, k2 = np.searchsorted(run.t, [2.0, 4.0])
+    measured = math.log(d[k2] / d[k1]) / (run.t[k2] - run.t[k1])
+    assert measured == pytest.approx(rate, rel=1e-3)
+
+
+def test_rotating_damping_destabilises_above_w0():
+    p = RodParams(damping_ratio=0.02)
+    c = campbell(p, np.linspace(0, 20, 81))
+    assert len(c.unstable_bands) == 1
+    assert c.unstable_bands[0][0] == pytest.approx(W0, rel=1e-5)
+    assert c.unstable_bands[0][1] == 20.0
+    assert modal_analysis(p, 5.0).max_growth_rate < 0
+
+
+def test_damped_free_vibration_decays_below_w0():
+    p = RodParams(damping_ratio=0.02, eccentricity=0.0)
+    slowest = max(m.growth_rate for m in modal_analysis(p, 5.0).modes)
+    assert slowest < 0
+    run = simulate(p, ConstantProfile(5.0), 10.0, initial={'u': 1e-3})
+    assert np.max(run.deflection[run.t > 9]) < 1.05e-3 * math.exp(slowest * 9)
+
+
+@pytest.mark.parametrize('start', ['quasi_static', 'step', 'impulsive'])
+def test_closed_form_critical_speeds_meet_their_definitions(start):
+    delta = 3e-3
+    r0 = np.array([0.0, 0.01, 0.1, 0.5])
+    w = critical_speed(RodParams(eccentricity=r0), delta, start)
+    assert w[0] == pytest.approx(W0)                  # r0 = 0: the natural frequency
+    assert np.all(np.diff(w) < 0)                     # Fig. 10: falls with eccentricity
+    w, r0 = w[1:], r0[1:]
+    us = w**2 * r0 / (W0**2 - w**2)
+    peak = {'quasi_static': us, 'step': 2 * us, 'impulsive': r0 * w / (W0 - w)}[start]
+    assert np.allclose(peak, delta, rtol=1e-12)
+
+
+def test_step_and_impulsive_peaks_approach_the_closed_form_bounds():
+    w = 2.0
+    t = np.arange(0, 2000, 2e-3)
+    us = w**2 * R0 / (W0**2 - w**2)
+    assert np.max(np.abs(step_start(t, w))) == pytest.approx(2 * us, rel=2e-3)
+    assert np.max(np.abs(impulsive_start(t, w))) == pytest.approx(R0 * w / (W0 - w), rel=2e-3)
+
+
+def test_numerical_critical_speed_for_a_slow_ramp_is_quasi_static():
+    p = RodParams(eccentricity=np.array([0.05, 0.1]))
+    w_num = critical_speed_for_profile(p, RampProfile(1.0, 300.0), 3e-3, t_end=300.0, dt=5e-3,
+                                       grid=12)
+    assert np.allclose(w_num, critical_speed(p, 3e-3, 'quasi_static'), rtol=2e-3)
+
+
+def test_numerical_critical_speed_for_sudden_starts():
+    p = RodParams()
+    step = critical_speed_for_profile(p, ConstantProfile(1.0), 3e-3, t_end=120.0, grid=8,
+                                      dt=4e-3)
+    imp = critical_speed_for_profile(p, StepProfile(1.0, t_step=0.5), 3e-3, t_end=120.0,
+                                     grid=8, dt=4e-3)
+    # finite runs never quite reach the asymptotic peak: slightly above the closed form
+    assert step == pytest.approx(critical_speed(p, 3e-3, 'step'), rel=0.02)
+    assert step >= critical_speed(p, 3e-3, 'step') * (1 - 1e-3)
+    assert imp == pytest.approx(critical_speed(p, 3e-3, 'impulsive'), rel=0.02)
+
+
+def test_critical_speed_rejects_bad_input():
+    with pytest.raises(ValueError, match='deflection_limit'):
+        critical_speed(RodParams(), -1.0)
+    with pytest.raises(ValueError, match='deflection_limit'):
+        critical_speed(RodParams(), math.nan)
+    with pytest.raises(ValueError, match='start'):
+        critical_speed(RodParams(), 3e-3, 'gradual')
+    with pytest.raises(ValueError, match='k1 != k2'):
+        critical_speed(RECT, 3e-3, 'step')
+
+
+def test_expm_batch_matches_scipy():
+    from scipy.linalg import expm
+    A = np.random.default_rng(3).normal(size=(40, 5, 5)) * np.array([0.01, 0.5, 3.0, 20.0]
+                                                                    ).repeat(10)[:, None, None]
+    ref = np.array([expm(a) for a in A])
+    rel = np.max(np.abs(expm_batch(A) - ref), axis=(1, 2)) / np.max(np.abs(ref), axis=(1, 2))
+    assert np.all(rel < 1e-11)

@@ -1,0 +1,77 @@
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rotrod_core.cli import main
+
+
+def test_simulate_writes_csv_with_units(tmp_path, capsys):
+    out = tmp_path / 'run.csv'
+    assert main(['simulate', '--profile', 'constant', '--omega', '2', '--t-end', '5',
+                 '-o', str(out)]) == 0
+    header = out.read_text().splitlines()[0]
+    assert header.startswith('t [s],u [m],v [m],du [m/s],dv [m/s],theta [rad],omega [rad/s]')
+    data = np.loadtxt(out, delimiter=',', skiprows=1)
+    assert data.shape == (5001, 11)
+    assert data[-1, 6] == pytest.approx(2.0)
+    assert 'wrote' in capsys.readouterr().out
+
+
+def test_simulate_torque_drive_to_npz(tmp_path):
+    out = tmp_path / 'spin.npz'
+    assert main(['simulate', '--drive', 'torque', '--torque', '0.05', '--t-end', '2',
+                 '--coupling', 'paper', '--initial', 'omega=1', 'u=0.001', '-o', str(out)]) == 0
+    with np.load(out) as z:
+        assert z['omega'][-1] > 1.0 and str(z['coupling']) == 'paper'
+        assert z['u'][0] == 0.001
+
+
+def test_simulate_with_parameter_overrides_and_table(tmp_path):
+    table = tmp_path / 'w.csv'
+    table.write_text('0,0\n2,1\n4,1\n')
+    out = tmp_path / 'r.csv'
+    assert main(['simulate', '--profile', 'table', '--table', str(table), '--mass', '0.5',
+                 '--eccentricity', '0.2', '--t-end', '4', '-o', str(out)]) == 0
+
+
+@pytest.mark.parametrize('argv, message', [
+    (['simulate', '--mass', '-1', '-o', 'x.csv'], 'mass'),
+    (['simulate', '--profile', 'table', '-o', 'x.csv'], '--table'),
+    (['simulate', '--drive', 'torque', '-o', 'x.csv'], '--torque'),
+    (['simulate', '--torque', '1', '-o', 'x.csv'], '--drive torque'),
+    (['simulate', '-o', 'x.txt'], '.csv or .npz'),
+    (['simulate', '-o', '/nonexistent/dir/x.csv'], 'does not exist'),
+    (['simulate', '--initial', 'u', '-o', 'x.csv'], 'NAME=VALUE'),
+    (['simulate', '--section', 'rectangular', '-o', 'x.csv'], 'section_width'),
+])
+def test_simulate_bad_arguments_give_clear_errors(argv, message, capsys, tmp_path,
+                                                  monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and 'error' in err
+
+
+@pytest.mark.parametrize('argv', [['simulate', '--dt', 'nan', '-o', 'x.csv'],
+                                  ['simulate', '--profile', 'zigzag', '-o', 'x.csv'],
+                                  ['bogus']])
+def test_argparse_rejects_malformed_values(argv):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+
+
+def test_frequencies_and_critical_speed_commands(capsys):
+    assert main(['frequencies', '--omega', '2']) == 0
+    assert '1.613061' in capsys.readouterr().out
+    assert main(['critical-speed', '--eccentricities', '0.1']) == 0
+    out = capsys.readouterr().out
+    assert '2.071036' in out and '1.475225' in out
+
+
+def test_console_script_is_installed():
+    exe = subprocess.run([sys.executable, '-m', 'rotrod_core.cli', '--help'],
+                         capture_output=True, text=True)
+    assert exe.returncode == 0 and 'simulate' in exe.stdout

@@ -1,0 +1,244 @@
+"""The integrators against exact solutions, a tight reference and the paper's facts."""
+
+import math
+
+import numpy as np
+import pytest
+from reference import R0, W0, eq26, impulsive_start, reference_run, step_start
+
+from rotrod_core import (
+    ConstantProfile,
+    Eq26Profile,
+    RealTimeStepper,
+    RodParams,
+    StepProfile,
+    simulate,
+    simulate_batch,
+)
+from rotrod_core.model import Coefficients, State, omega_jump
+
+
+@pytest.fixture(scope='module')
+def eq26_run():
+    return simulate(RodParams(), Eq26Profile(), 40.0, dt=1e-3)
+
+
+def test_step_start_matches_eq29():
+    w = 2.0
+    run = simulate(RodParams(), ConstantProfile(w), 20.0, dt=1e-3)
+    z = step_start(run.t, w)
+    assert np.max(np.abs(run.u + 1j * run.v - z)) < 1e-12
+
+
+def test_impulsive_start_matches_closed_form():
+    w, ts = 2.0, 1.0
+    run = simulate(RodParams(), StepProfile(w, t_step=ts), 11.0, dt=1e-3)
+    before = run.t < ts
+    assert np.all(run.u[before] == 0) and np.all(run.v[before] == 0)
+    after = run.t >= ts
+    z = impulsive_start(run.t[after] - ts, w)
+    assert np.max(np.abs(run.u[after] + 1j * run.v[after] - z)) < 1e-12
+    # the jump itself: relative velocity -w x r0 right at the step
+    k = np.searchsorted(run.t, ts)
+    assert run.du[k] == pytest.approx(0.0, abs=1e-15)
+    assert run.dv[k] == pytest.approx(-w * R0, rel=1e-12)
+
+
+def test_stepper_matches_eq29():
+    w, dt = 2.0, 1e-3
+    st = RealTimeStepper(RodParams(), dt=dt, initial={'omega': w})
+    zs = []
+    for _ in range(5000):
+        s = st.step_velocity(0.0)
+        zs.append(s.u + 1j * s.v)
+    t = dt * np.arange(1, 5001)
+    z = step_start(t, w)
+    # classical RK4's phase error: ~ (h w2)^4 w2 t / 120 relative, w2 = w0 + w
+    w2 = W0 + w
+    bound = 2 * (dt * w2) ** 4 * w2 * t[-1] / 120 * np.max(np.abs(z))
+    assert np.max(np.abs(np.array(zs) - z)) < bound
+
+
+def test_stepper_jump_keeps_absolute_velocity():
+    p = RodParams()
+    co = Coefficients.from_params(p)
+    s = State(1e-3, -2e-4, 3e-3, 1e-3, 0.4, 1.0)
+    n = omega_jump(co, s, 2.5)
+
+    def absolute(s):
+        return (s.du - s.omega * s.v, s.dv + s.omega * (R0 + s.u))
+
+    assert absolute(n) == pytest.approx(absolute(s), abs=1e-15)
+    st = RealTimeStepper(p, initial=s._asdict())
+    assert tuple(st.jump_omega(2.5)) == pytest.approx(tuple(n))
+
+
+def test_eq26_run_matches_tight_reference(eq26_run):
+    """The issue's accuracy target: within 1e-9 m of DOP853 at rtol 1e-12."""
+    w = lambda t: eq26(t)[0]  # noqa: E731
+    wd = lambda t: eq26(t)[1]  # noqa: E731
+    u, v = reference_run(w, wd, eq26_run.t)
+    assert np.max(np.abs(eq26_run.u - u)) < 1e-9
+    assert np.max(np.abs(eq26_run.v - v)) < 1e-9
+
+
+def test_velocity_drive_at_20ms_steps_stays_within_1e10(eq26_run):
+    coarse = simulate(RodParams(), Eq26Profile(), 40.0, dt=0.02)
+    idx = np.searchsorted(eq26_run.t, coarse.t - 1e-9)
+    assert np.max(np.abs(coarse.u - eq26_run.u[idx])) < 1e-10
+    assert np.max(np.abs(coarse.v - eq26_run.v[idx])) < 1e-10
+
+
+def test_paper_facts_for_the_eq26_run(eq26_run):
+    r = eq26_run
+    up = r.window(0, 15)
+    hold = r.window(15, 20)
+    down = r.window(20, 35)
+    rest = r.window(35, 40)
+    # spin-up: out radially, back tangentially; radial ~10x tangential
+    assert up.u.max() == pytest.approx(2.79e-3, rel=0.01)
+    assert up.v.min() == pytest.approx(-0.19e-3, rel=0.03)
+    assert up.v.max() < 0.01 * abs(up.v.min())
+    assert 10 <= up.u.max() / abs(up.v.min()) <= 20
+    # hold at 2 rad/s: around the static deflection 2.792 mm, tangential oscillation tiny
+    u_s = 0.3 * 4 * R0 / (0.3 * W0**2 - 0.3 * 4)
+    assert u_s == pytest.approx(2.792e-3, rel=1e-3)
+    assert hold.u.mean() == pytest.approx(u_s, rel=1e-3)
+    assert np.ptp(hold.v) < 1e-3 * hold.u.mean()
+    # spin-down: radial falls, tangential forward (v > 0) up to ~0.19 mm
+    assert down.v.max() == pytest.approx(0.19e-3, rel=0.03)
+    assert down.v.min() > -0.01 * down.v.max()
+    assert down.u[-1] < 0.01 * down.u.max()
+    # rest: a small free (elliptical) vibration, sub-micrometre
+    assert 0 < np.max(rest.deflection) < 1e-6
+
+
+def test_hub_torque_in_velocity_drive_is_the_rate_of_angular_momentum(eq26_run):
+    r = eq26_run
+    dLdt = np.gradient(r.angular_momentum(), r.t)
+    inner = slice(5, -5)
+    assert np.max(np.abs(dLdt[inner] - r.torque[inner])) < 1e-6 * np.max(np.abs(r.torque))
+
+
+@pytest.mark.parametrize('runner', ['simulate', 'stepper'])
+def test_exact_coupling_conserves_energy_and_angular_momentum(runner):
+    p = RodParams(hub_inertia=0.01)
+    init = {'omega': 2.0, 'u': 1e-3}
+    if runner == 'simulate':
+        r = simulate(p, torque=0.0, t_end=40.0, initial=init)
+        E, L = r.energy(), r.angular_momentum()
+    else:
+        st = RealTimeStepper(p, initial=init)
+        E, L = [st.energy()], [st.angular_momentum()]
+        for _ in range(40000):
+            st.step_torque(0.0)
+            E.append(st.energy())
+            L.append(st.angular_momentum())
+        E, L = np.array(E), np.array(L)
+    assert np.max(np.abs(E - E[0])) / E[0] < 1e-9
+    assert np.max(np.abs(L - L[0])) / L[0] < 1e-9
+
+
+def test_paper_coupling_drifts_as_model_md_measures():
+    r = simulate(RodParams(hub_inertia=0.01), torque=0.0, t_end=40.0, coupling='paper',
+                 initial={'omega': 2.0, 'u': 1e-3})
+    E, L = r.energy(), r.angular_momentum()
+    assert np.max(np.abs(E - E[0])) / E[0] == pytest.approx(0.043, abs=0.002)
+    assert np.max(np.abs(L - L[0])) / L[0] == pytest.approx(0.022, abs=0.001)
+
+
+@pytest.mark.parametrize('zeta', [0.0, 0.03])
+def test_energy_rate_under_torque(zeta):
+    """dE/dt = Q w - c1 u'^2 - c2 v'^2 and dL/dt = Q, integrated over the run."""
+    p = RodParams(damping_ratio=zeta)
+    Q = lambda t: 0.02 * math.sin(0.5 * t) + 0.01  # noqa: E731
+    r = simulate(p, torque=Q, t_end=20.0, initial={'omega': 0.5})
+    power = r.torque * r.omega - p.damping_radial * r.du**2 - p.damping_tangential * r.dv**2
+    from scipy.integrate import cumulative_simpson
+    E, L = r.energy(), r.angular_momentum()
+    work = cumulative_simpson(power, x=r.t, initial=0)
+    impulse = cumulative_simpson(r.torque, x=r.t, initial=0)
+    assert np.max(np.abs(E - E[0] - work)) < 1e-9 * np.max(E)
+    assert np.max(np.abs(L - L[0] - impulse)) < 1e-9 * np.max(L)
+    assert r.omega[-1] > 0.5   # the net positive torque spun the hub up
+
+
+def test_batch_matches_closed_form_over_eccentricity():
+    r0 = np.array([0.0, 0.05, 0.1, 0.2])
+    w, t_end = 2.0, 10.0
+    b = simulate_batch(RodParams(eccentricity=r0), ConstantProfile(w), t_end, dt=1e-3,
+                       record_every=10)
+    w2 = W0 + w
+    for i, r in enumerate(r0):
+        z = step_start(b.t, w, r0=r)
+        bound = 2 * (1e-3 * w2) ** 4 * w2 * t_end / 120 * np.max(np.abs(z))  # RK4 phase error
+        assert np.max(np.abs(b.u[i] + 1j * b.v[i] - z)) <= bound
+        assert b.peak_deflection[i] == pytest.approx(
+            np.max(np.abs(step_start(np.arange(0, t_end + 1e-9, 1e-3), w, r0=r))),
+            abs=bound + 1e-15)
+
+
+def test_batch_torque_drive_conserves_invariants():
+    J = np.array([0.01, 0.05, 0.2])
+    b = simulate_batch(RodParams(hub_inertia=J), torque=0.0, t_end=10.0,
+                       initial={'omega': 2.0, 'u': 1e-3})
+    from rotrod_core.model import angular_momentum
+    co = Coefficients.from_params(RodParams(hub_inertia=J))
+    s0 = State(1e-3, 0.0, 0.0, 0.0, 0.0, 2.0)
+    assert np.allclose(angular_momentum(co, b.final), angular_momentum(co, s0), rtol=1e-10)
+
+
+def test_batch_in_worker_processes_matches_single_process():
+    r0 = np.linspace(0.05, 0.15, 4000)
+    p = RodParams(eccentricity=r0)
+    one = simulate_batch(p, Eq26Profile(), 2.0, workers=1)
+    two = simulate_batch(p, Eq26Profile(), 2.0, workers=2)
+    assert np.array_equal(one.peak_deflection, two.peak_deflection)
+    assert np.array_equal(one.final.u, two.final.u)
+
+
+def test_non_finite_step_keeps_the_state():
+    st = RealTimeStepper(RodParams())
+    st.step_velocity(1.0)
+    before = st.state
+    for bad in (math.nan, math.inf, 'x'):
+        with pytest.raises(ValueError):
+            st.step_velocity(bad)
+        with pytest.raises(ValueError):
+            st.step_torque(bad)
+        with pytest.raises(ValueError):
+            st.jump_omega(bad)
+    assert st.state == before
+    from rotrod_core import NonFiniteStateError
+    st.jump_omega(1e200)
+    kept = st.state
+    with pytest.raises(NonFiniteStateError):
+        st.step_velocity(0.0)
+    assert st.state == kept
+
+
+@pytest.mark.parametrize('kwargs, match', [
+    ({'profile': Eq26Profile(), 't_end': -1}, 't_end'),
+    ({'profile': Eq26Profile(), 't_end': 1.0, 'dt': 0}, 'dt'),
+    ({'profile': Eq26Profile(), 't_end': math.nan}, 't_end'),
+    ({'profile': Eq26Profile(), 't_end': 1.0, 'dt': 2.0}, 'dt'),
+    ({'t_end': 1.0}, 'exactly one'),
+    ({'profile': Eq26Profile(), 'torque': 1.0, 't_end': 1.0}, 'exactly one'),
+    ({'torque': math.nan, 't_end': 1.0}, 'torque'),
+    ({'torque': lambda t: math.inf, 't_end': 1.0}, 'torque'),
+    ({'profile': Eq26Profile(), 't_end': 1.0, 'coupling': 'approx'}, 'coupling'),
+    ({'profile': Eq26Profile(), 't_end': 1.0, 'initial': {'omega': 1.0}}, 'omega'),
+    ({'profile': Eq26Profile(), 't_end': 1.0, 'initial': {'w': 1.0}}, 'unknown'),
+    ({'torque': 0.0, 't_end': 1.0, 'initial': {'u': math.nan}}, 'finite'),
+])
+def test_simulate_rejects_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        simulate(RodParams(), **kwargs)
+
+
+def test_exact_coupling_needs_hub_inertia():
+    with pytest.raises(ValueError, match='hub_inertia'):
+        simulate(RodParams(hub_inertia=0.0), torque=0.0, t_end=1.0)
+    r = simulate(RodParams(hub_inertia=0.0), torque=0.0, t_end=1.0, coupling='paper',
+                 initial={'omega': 1.0})
+    assert np.all(np.isfinite(r.omega))
