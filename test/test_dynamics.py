@@ -242,3 +242,15 @@ def test_exact_coupling_needs_hub_inertia():
     r = simulate(RodParams(hub_inertia=0.0), torque=0.0, t_end=1.0, coupling='paper',
                  initial={'omega': 1.0})
     assert np.all(np.isfinite(r.omega))
+
+
+def test_inertial_position_moves_with_the_absolute_velocity(eq26_run):
+    """d/dt (x, y) equals the absolute velocity (u' - w v, v' + w (r0 + u)) turned by theta."""
+    r = eq26_run
+    vx_rot, vy_rot = r.du - r.omega * r.v, r.dv + r.omega * (R0 + r.u)
+    c, s = np.cos(r.theta), np.sin(r.theta)
+    vx, vy = vx_rot * c - vy_rot * s, vx_rot * s + vy_rot * c
+    inner = slice(1, -1)
+    assert np.allclose(np.gradient(r.x, r.t)[inner], vx[inner], atol=1e-6)
+    assert np.allclose(np.gradient(r.y, r.t)[inner], vy[inner], atol=1e-6)
+    assert np.allclose(np.hypot(r.x, r.y), np.hypot(R0 + r.u, r.v), atol=1e-15)
