@@ -193,8 +193,9 @@ def simulate(params: RodParams, profile: Profile | None = None, t_end: float | N
                          '(torque drive)')
     if t_end is None:
         raise ValueError('t_end is required')
-    check_coupling(params, coupling) if torque is not None else None
-    if coupling not in model.COUPLINGS:
+    if torque is not None:
+        check_coupling(params, coupling)        # the exact torque drive also needs J > 0
+    elif coupling not in model.COUPLINGS:
         raise ValueError(f'coupling must be one of {model.COUPLINGS}, got {coupling!r}')
     t = time_grid(t_end, dt)
     co = Coefficients.from_params(params)
