@@ -56,3 +56,8 @@ def eq26(t, T=15.0, W=2.0):
         return W * (1 - s / T + math.sin(2 * math.pi * s / T) / (2 * math.pi)), \
             W / T * (math.cos(2 * math.pi * s / T) - 1)
     return 0.0, 0.0
+
+
+def rk4_phase_bound(h, w, t, amplitude):
+    """Twice classical RK4's phase error after time t: ~ (h w)^4 w t / 120 x amplitude."""
+    return 2 * (h * w) ** 4 * w * t / 120 * amplitude

@@ -16,7 +16,6 @@ sourced) and from a directory outside the repository:
   the ament resource marker ``share/ament_index/resource_index/packages/rotrod`` exist.
 """
 
-import ast
 import configparser
 import json
 import os
@@ -30,6 +29,7 @@ from importlib import metadata
 from pathlib import Path
 
 import pytest
+import setup_py
 
 pytestmark = pytest.mark.slow
 
@@ -41,12 +41,9 @@ EXCLUDED_DIRS = {'.git', '.venv', 'build', 'install', 'log', '__pycache__', '.py
 
 def declared_console_scripts() -> dict:
     """``{name: 'module:function'}`` from setup.py's ``CONSOLE_SCRIPTS`` list (via ast)."""
-    tree = ast.parse((ROOT / 'setup.py').read_text(), filename='setup.py')
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(
-                isinstance(t, ast.Name) and t.id == 'CONSOLE_SCRIPTS' for t in node.targets):
-            return parse_entry_points(ast.literal_eval(node.value))
-    raise AssertionError('setup.py has no module-level CONSOLE_SCRIPTS list')
+    scripts = setup_py.constants().get('CONSOLE_SCRIPTS')
+    assert scripts is not None, 'setup.py has no module-level CONSOLE_SCRIPTS list'
+    return parse_entry_points(scripts)
 
 
 def parse_entry_points(lines) -> dict:

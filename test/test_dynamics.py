@@ -4,7 +4,15 @@ import math
 
 import numpy as np
 import pytest
-from reference import R0, W0, eq26, impulsive_start, reference_run, step_start
+from reference import (
+    R0,
+    W0,
+    eq26,
+    impulsive_start,
+    reference_run,
+    rk4_phase_bound,
+    step_start,
+)
 
 from rotrod_core import (
     ConstantProfile,
@@ -53,9 +61,7 @@ def test_stepper_matches_eq29():
         zs.append(s.u + 1j * s.v)
     t = dt * np.arange(1, 5001)
     z = step_start(t, w)
-    # classical RK4's phase error: ~ (h w2)^4 w2 t / 120 relative, w2 = w0 + w
-    w2 = W0 + w
-    bound = 2 * (dt * w2) ** 4 * w2 * t[-1] / 120 * np.max(np.abs(z))
+    bound = rk4_phase_bound(dt, W0 + w, t[-1], np.max(np.abs(z)))
     assert np.max(np.abs(np.array(zs) - z)) < bound
 
 
@@ -168,10 +174,9 @@ def test_batch_matches_closed_form_over_eccentricity():
     w, t_end = 2.0, 10.0
     b = simulate_batch(RodParams(eccentricity=r0), ConstantProfile(w), t_end, dt=1e-3,
                        record_every=10)
-    w2 = W0 + w
     for i, r in enumerate(r0):
         z = step_start(b.t, w, r0=r)
-        bound = 2 * (1e-3 * w2) ** 4 * w2 * t_end / 120 * np.max(np.abs(z))  # RK4 phase error
+        bound = rk4_phase_bound(1e-3, W0 + w, t_end, np.max(np.abs(z)))
         assert np.max(np.abs(b.u[i] + 1j * b.v[i] - z)) <= bound
         assert b.peak_deflection[i] == pytest.approx(
             np.max(np.abs(step_start(np.arange(0, t_end + 1e-9, 1e-3), w, r0=r))),

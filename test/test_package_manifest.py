@@ -8,7 +8,6 @@
   fresh interpreter in which importing ``rclpy`` or any ROS message package fails.
 """
 
-import ast
 import json
 import os
 import subprocess
@@ -17,6 +16,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from setup_py import setup_kwargs
 
 ROOT = Path(__file__).resolve().parent.parent
 CORE = 'rotrod_core'
@@ -28,32 +28,6 @@ REQUIRED_EXEC_DEPENDS = {
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 # PyPI name (lower case) -> rosdep key, where it is not simply python3-<name>.
 ROSDEP_KEYS = {'pyyaml': 'python3-yaml'}
-
-
-def setup_py_literals() -> dict:
-    """The literal keyword arguments of ``setup()`` and module-level constants of setup.py."""
-    tree = ast.parse((ROOT / 'setup.py').read_text(), filename='setup.py')
-    constants = {}
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and len(node.targets) == 1 \
-                and isinstance(node.targets[0], ast.Name):
-            try:
-                constants[node.targets[0].id] = ast.literal_eval(node.value)
-            except ValueError:
-                pass
-    calls = [node for node in ast.walk(tree) if isinstance(node, ast.Call)
-             and getattr(node.func, 'id', getattr(node.func, 'attr', None)) == 'setup']
-    assert len(calls) == 1, 'setup.py must call setup() exactly once'
-    kwargs = {}
-    for kw in calls[0].keywords:
-        if isinstance(kw.value, ast.Name) and kw.value.id in constants:
-            kwargs[kw.arg] = constants[kw.value.id]
-        else:
-            try:
-                kwargs[kw.arg] = ast.literal_eval(kw.value)
-            except ValueError:
-                kwargs[kw.arg] = None  # computed (e.g. glob); not needed here
-    return kwargs
 
 
 @pytest.fixture(scope='module')
@@ -82,7 +56,7 @@ def test_manifest_dependencies(manifest):
 
 def test_install_requires_are_exec_depends(manifest):
     exec_depends = {dep.name for dep in manifest.exec_depends}
-    requires = setup_py_literals().get('install_requires') or []
+    requires = setup_kwargs().get('install_requires') or []
     for req in requires:
         name = req.split(';')[0].strip()
         for sep in '<>=!~[ ':
@@ -92,7 +66,7 @@ def test_install_requires_are_exec_depends(manifest):
 
 
 def test_version_matches_setup_py(manifest):
-    kwargs = setup_py_literals()
+    kwargs = setup_kwargs()
     assert kwargs.get('name') == manifest.name
     assert kwargs.get('version') == manifest.version
 
