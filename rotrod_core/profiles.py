@@ -374,8 +374,9 @@ class TableProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> TableProfile:
         """Omegas scaled so the largest |w| is ``omega_peak``."""
-        scale = omega_peak / self.peak if self.peak > 0 else 0.0
-        return TableProfile(self.times, self.omegas * scale)
+        if self.peak == 0:
+            raise ValueError('TableProfile.with_peak: an all-zero table has no shape to scale')
+        return TableProfile(self.times, self.omegas * (omega_peak / self.peak))
 
     @classmethod
     def from_csv(cls, path) -> TableProfile:

@@ -67,6 +67,11 @@ def test_with_peak_rescales_the_shape(p):
     assert np.allclose(q.omega(t), p.omega(t) * 3.0 / p.peak)   # same sign, same shape
 
 
+def test_with_peak_of_an_all_zero_table_is_an_error():
+    with pytest.raises(ValueError, match='all-zero'):
+        TableProfile([0, 1], [0, 0]).with_peak(2.0)
+
+
 def test_step_profile_jump_only_after_start():
     assert StepProfile(2.0, t_step=1.0).jumps() == ((1.0, 0.0, 2.0),)
     assert StepProfile(2.0).jumps() == ()
