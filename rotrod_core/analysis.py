@@ -232,3 +232,16 @@ def static_deflection(params: RodParams, omega):
     if u.ndim == 0:
         return float(u), 0.0
     return u, v
+
+
+def tangential_bending(params: RodParams, omega_dot):
+    """Quasi-static tangential deflection |v| (m) under a steady hub acceleration.
+
+    From Eq. 17 with v'' = v' = 0 and w small: k2 v = -m w' r0, so
+    |v| = |w'| r0 m / k2 for an angular acceleration ``omega_dot`` (rad/s^2). A sudden
+    w' overshoots to twice this. Vectorized.
+    """
+    wd = np.abs(_omega_array(omega_dot, 'omega_dot'))
+    v = wd * params.eccentricity * params.mass / params.stiffness_tangential
+    v = np.asarray(v, dtype=float)
+    return float(v) if v.ndim == 0 else v

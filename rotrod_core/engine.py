@@ -1,0 +1,453 @@
+"""A live simulation session: one rod, its drive, command shaping, limits and health.
+
+:class:`SimulationEngine` is what a real-time front end (the ROS simulator node)
+drives: it owns a :class:`~rotrod_core.stepper.RealTimeStepper`, takes timestamped
+commands (angular-velocity setpoints or hub torques), advances in whole fixed steps
+on its own simulated clock, halts on a state beyond the deflection limit or a
+non-finite one (keeping the last good state), and reports its health.
+:class:`EngineConfig` holds everything that can be configured, validated as a whole
+so that a combination that makes no physical sense is refused with a reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+from . import model
+from .analysis import dynamic_frequencies, modal_analysis, tangential_bending
+from .command import OmegaSetpointShaper
+from .critical import critical_speed
+from .model import STATE_FIELDS, State, make_state
+from .params import RodParams
+from .stepper import NonFiniteStateError, RealTimeStepper, check_coupling
+
+DRIVES = ('velocity', 'torque')
+
+OK, WARN, ERROR = 0, 1, 2
+"""Health levels (the values of diagnostic_msgs/DiagnosticStatus)."""
+
+STEP_RESOLUTION = 0.5
+"""Largest dt x |lambda| allowed for the fastest deflection mode (RK4 phase error
+per radian of that mode ~ (dt |lambda|)^4 / 120, here below 0.06 %)."""
+
+
+class CommandRejected(ValueError):
+    """A command was refused (reason in the message); the simulation is unchanged."""
+
+
+def _number(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
+    if isinstance(value, bool):
+        raise ValueError(f'{name} must be a number, got {value!r}')
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f'{name} must be a number, got {value!r}') from None
+    if not math.isfinite(x):
+        raise ValueError(f'{name} must be finite, got {value!r}')
+    if positive and not x > 0:
+        raise ValueError(f'{name} must be > 0, got {value!r}')
+    if nonnegative and not x >= 0:
+        raise ValueError(f'{name} must be >= 0, got {value!r}')
+    return x
+
+
+def fastest_rate(params: RodParams, max_omega: float) -> float:
+    """Bound on |lambda| (rad/s) of the deflection modes for |w| <= ``max_omega`` (rad/s).
+
+    In the rotating frame the modes are the rod's own (|lambda| <= wn max(1, 2 zeta))
+    shifted by at most |w|.
+    """
+    wn = max(params.natural_frequency_radial, params.natural_frequency_tangential)
+    return float(wn * max(1.0, 2.0 * float(params.damping_ratio)) + abs(max_omega))
+
+
+@dataclass(frozen=True)
+class EngineConfig:
+    """Configuration of a :class:`SimulationEngine` (SI units), validated on creation.
+
+    Attributes:
+        params: the rod (one system).
+        drive: ``'velocity'`` (w follows setpoints) or ``'torque'`` (free rotation).
+        coupling: ``'exact'`` or ``'paper'`` (see :mod:`rotrod_core.model`).
+        physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
+        max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
+            The hub's angular acceleration bends the rod backwards: quasi-statically
+            v = -w' r0 m / k2 (0.68 mm per rad/s^2 for Table 1), up to twice that
+            when w' is applied suddenly. A bound whose quasi-static bending alone
+            exceeds ``deflection_limit`` is refused.
+        max_omega: largest |w| accepted as a setpoint, and reached in torque drive
+            before the simulation halts, rad/s.
+        max_torque: largest |Q| accepted as a torque command, N m.
+        deflection_limit: |r| = sqrt(u^2 + v^2) beyond which the simulation halts, m.
+        warn_fraction: fraction of ``deflection_limit`` above which health is WARN.
+        critical_margin: relative distance to a critical speed within which health
+            is WARN (0.05 = within 5 %).
+        initial: initial state by name (u, v, du, dv, theta, omega), as
+            ``(name, value)`` pairs or a dict; others zero. Used at start and reset.
+    """
+
+    params: RodParams = field(default_factory=RodParams)
+    drive: str = 'velocity'
+    coupling: str = 'exact'
+    physics_rate: float = 1000.0
+    max_angular_acceleration: float = 0.5
+    max_omega: float = 50.0
+    max_torque: float = 100.0
+    deflection_limit: float = 0.003
+    warn_fraction: float = 0.8
+    critical_margin: float = 0.05
+    initial: tuple = ()
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        if not isinstance(self.params, RodParams):
+            raise ValueError(f'params must be RodParams, got {self.params!r}')
+        if self.params.is_batch:
+            raise ValueError('the engine simulates one system; got a batch of RodParams')
+        if self.drive not in DRIVES:
+            raise ValueError(f'drive must be one of {DRIVES}, got {self.drive!r}')
+        check_coupling(self.params, self.coupling)
+        for name in ('physics_rate', 'max_angular_acceleration', 'max_omega', 'max_torque',
+                     'deflection_limit', 'warn_fraction'):
+            set_(self, name, _number(name, getattr(self, name), positive=True))
+        set_(self, 'critical_margin',
+             _number('critical_margin', self.critical_margin, nonnegative=True))
+        if self.warn_fraction > 1:
+            raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
+        if self.critical_margin >= 1:
+            raise ValueError(f'critical_margin must be in [0, 1), got {self.critical_margin!r}')
+        rate = fastest_rate(self.params, self.max_omega)
+        needed = rate / STEP_RESOLUTION
+        if self.physics_rate < needed:
+            raise ValueError(
+                f'physics_rate {self.physics_rate:g} Hz is too low for this rod: the fastest '
+                f'deflection mode at |w| <= max_omega ({self.max_omega:g} rad/s) reaches '
+                f'{rate:.4g} rad/s, so RK4 needs physics_rate >= {needed:.4g} Hz '
+                f'(or a lower max_omega)')
+        bend = tangential_bending(self.params, self.max_angular_acceleration)
+        if bend > self.deflection_limit:
+            raise ValueError(
+                f'max_angular_acceleration {self.max_angular_acceleration:g} rad/s^2 bends the '
+                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 m / k2), beyond '
+                f'the {self.deflection_limit * 1e3:.3g} mm deflection_limit: every ramp at '
+                'that rate would halt the simulation')
+        initial = dict(self.initial)
+        state = make_state(initial)
+        set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
+        if abs(state.omega) > self.max_omega:
+            raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
+                             f'{self.max_omega:g} rad/s')
+        r = math.hypot(state.u, state.v)
+        if r > self.deflection_limit:
+            raise ValueError(f'initial deflection {r:g} m exceeds deflection_limit '
+                             f'{self.deflection_limit:g} m')
+
+    @property
+    def dt(self) -> float:
+        """Integration step, s."""
+        return 1.0 / self.physics_rate
+
+    @property
+    def initial_state(self) -> State:
+        """The initial state as a :class:`State`."""
+        return make_state(dict(self.initial))
+
+    def replace(self, **changes) -> EngineConfig:
+        """A validated copy with some fields changed; RodParams fields go to ``params``."""
+        rod = {k: changes.pop(k) for k in list(changes) if k in _ROD_FIELDS}
+        if rod:
+            changes['params'] = (changes.get('params') or self.params).replace(**rod)
+        return dataclasses.replace(self, **changes)
+
+
+_ROD_FIELDS = {f.name for f in dataclasses.fields(RodParams)}
+
+
+@dataclass(frozen=True)
+class Health:
+    """The session's health: ``level`` (OK, WARN, ERROR), a message, named values."""
+
+    level: int
+    message: str
+    values: tuple = ()
+
+
+class SimulationEngine:
+    """One rod simulated in fixed steps on its own clock, driven by timestamped commands.
+
+    The simulated clock :attr:`time` (s) starts at 0 and only moves forward (a reset
+    returns the state, not the clock, to the start). Commands may carry a time ``at``
+    (s, not before :attr:`time`): they take effect then, so a front end that advances
+    in batches of steps still applies each command at the instant it arrived.
+    """
+
+    def __init__(self, config: EngineConfig | None = None):
+        self.config = config if config is not None else EngineConfig()
+        self._origin = 0.0
+        self._steps = 0
+        self._stepper = self._make_stepper(self.config, self.config.initial_state)
+        self.halted: str | None = None
+        self.rejected_commands = 0
+        self._reset_commands()
+        self._cache_limits()
+
+    # ----------------------------------------------------------------- construction
+    @staticmethod
+    def _make_stepper(config: EngineConfig, state: State) -> RealTimeStepper:
+        stepper = RealTimeStepper(config.params, config.dt, config.coupling)
+        stepper.set_state(**state._asdict())
+        return stepper
+
+    def _reset_commands(self) -> None:
+        cfg = self.config
+        self._shaper = OmegaSetpointShaper(cfg.max_angular_acceleration,
+                                           omega=self.state.omega, time=self.time)
+        self._torque_schedule: deque = deque()
+        self.torque_command = 0.0
+        st = self._stepper
+        self._torque = (0.0 if cfg.drive == 'torque' else
+                        float(model.hub_torque(st.coefficients, st.state, 0.0, st.coupling)))
+        self._omega_dot = 0.0
+
+    def _cache_limits(self) -> None:
+        p, cfg = self.config.params, self.config
+        self.critical_speeds = {
+            'deflection_limit': float(critical_speed(p, cfg.deflection_limit)),
+            'radial_natural_frequency': float(p.natural_frequency_radial),
+            'tangential_natural_frequency': float(p.natural_frequency_tangential),
+        }
+        self._always_stable = bool(p.is_isotropic and not float(p.damping_ratio) > 0)
+        self._stability: dict = {}
+        self._frequencies: dict = {}
+
+    # ----------------------------------------------------------------- state
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self._origin + self._steps * self.config.dt
+
+    @property
+    def dt(self) -> float:
+        """Integration step, s."""
+        return self.config.dt
+
+    @property
+    def state(self) -> State:
+        """Current state (u, v, du, dv, theta, omega), SI units."""
+        return self._stepper.state
+
+    @property
+    def torque(self) -> float:
+        """Hub torque, N m.
+
+        The applied torque in torque drive; in velocity drive, the torque the drive
+        must supply to impose w'.
+        """
+        return self._torque
+
+    @property
+    def omega_dot(self) -> float:
+        """Hub angular acceleration over the last step, rad/s^2."""
+        return self._omega_dot
+
+    @property
+    def setpoint(self) -> float:
+        """Latest accepted angular-velocity setpoint, rad/s (velocity drive)."""
+        return self._shaper.setpoint
+
+    @property
+    def deflection(self) -> float:
+        """|r| = sqrt(u^2 + v^2) of the mass, m."""
+        s = self.state
+        return math.hypot(s.u, s.v)
+
+    def inertial_position(self) -> tuple:
+        """Position (x, y, z) of the mass in the inertial frame, m (z = rod length)."""
+        x, y = self._stepper.inertial_position()
+        return x, y, float(self.config.params.rod_length)
+
+    def energy(self) -> float:
+        """Total mechanical energy, J."""
+        return self._stepper.energy()
+
+    def angular_momentum(self) -> float:
+        """Angular momentum about the axis, kg m^2/s."""
+        return self._stepper.angular_momentum()
+
+    def frequencies(self) -> tuple:
+        """Dynamic frequencies (f1, f2) in Hz at the current w (Eq. 28 or eigen analysis)."""
+        w = self.state.omega
+        f = self._frequencies.get(w)
+        if f is None:
+            if len(self._frequencies) > 64:
+                self._frequencies.clear()
+            f = self._frequencies[w] = dynamic_frequencies(self.config.params, w)
+        return f
+
+    # ----------------------------------------------------------------- commands
+    def _command_time(self, at) -> float:
+        t = self.time if at is None else _number('command time', at)
+        return max(t, self.time, self._shaper.last_command_time)
+
+    def _reject(self, reason: str):
+        self.rejected_commands += 1
+        raise CommandRejected(reason)
+
+    def _check_command(self, name: str, value, drive: str, limit: float, unit: str) -> float:
+        try:
+            x = _number(name, value)
+        except ValueError as exc:
+            self._reject(str(exc))
+        if abs(x) > limit:
+            self._reject(f'{name} {x:g} {unit} exceeds the limit {limit:g} {unit}')
+        if self.config.drive != drive:
+            self._reject(f'{name} ignored: drive is {self.config.drive!r} '
+                         f'(set drive to {drive!r} to use it)')
+        if self.halted:
+            self._reject(f'{name} ignored: simulation halted ({self.halted}); reset first')
+        return x
+
+    def command_omega(self, setpoint, at=None) -> None:
+        """Angular-velocity setpoint (rad/s) from time ``at`` (s) on; velocity drive."""
+        w = self._check_command('omega setpoint', setpoint, 'velocity',
+                                self.config.max_omega, 'rad/s')
+        self._shaper.command(w, self._command_time(at))
+
+    def command_torque(self, torque, at=None) -> None:
+        """Hub torque (N m) from time ``at`` (s) on; torque drive."""
+        q = self._check_command('torque', torque, 'torque', self.config.max_torque, 'N m')
+        t = self._command_time(at)
+        if self._torque_schedule and self._torque_schedule[-1][0] > t:
+            t = self._torque_schedule[-1][0]
+        self._torque_schedule.append((t, q))
+
+    # ----------------------------------------------------------------- stepping
+    def step(self) -> bool:
+        """Advance one step; False (and no change) if halted or the step was refused."""
+        if self.halted:
+            return False
+        stepper, cfg, dt = self._stepper, self.config, self.config.dt
+        before = stepper.state
+        t0 = self.time
+        try:
+            if cfg.drive == 'velocity':
+                omega_dot = (self._shaper.omega(t0 + dt) - before.omega) / dt
+                state = stepper.step_velocity(omega_dot)
+            else:
+                while self._torque_schedule and self._torque_schedule[0][0] <= t0 + 0.5 * dt:
+                    self.torque_command = self._torque_schedule.popleft()[1]
+                state = stepper.step_torque(self.torque_command)
+        except NonFiniteStateError:
+            self.halted = f'non-finite state at t = {t0 + dt:.6f} s'
+            return False
+        r = math.hypot(state.u, state.v)
+        problem = None
+        if r > cfg.deflection_limit:
+            problem = (f'deflection {r * 1e3:.4g} mm beyond the limit '
+                       f'{cfg.deflection_limit * 1e3:.4g} mm at t = {t0 + dt:.4f} s')
+        elif abs(state.omega) > cfg.max_omega:
+            problem = (f'|omega| {abs(state.omega):.4g} rad/s beyond max_omega '
+                       f'{cfg.max_omega:.4g} rad/s at t = {t0 + dt:.4f} s')
+        if problem:
+            stepper.set_state(**before._asdict())
+            self.halted = problem + '; halted at the last good state'
+            return False
+        self._steps += 1
+        self._torque = stepper.torque
+        self._omega_dot = stepper.omega_dot
+        if self._steps % 256 == 0:
+            self._shaper.forget_before(self.time)
+        return True
+
+    def advance(self, steps: int) -> int:
+        """Take up to ``steps`` steps (fewer if halted); return how many were taken."""
+        done = 0
+        while done < steps and self.step():
+            done += 1
+        return done
+
+    def steps_until(self, t: float) -> int:
+        """Number of whole steps from :attr:`time` to reach time ``t`` (s), >= 0."""
+        return max(0, math.floor((t - self.time) / self.config.dt + 1e-9))
+
+    def advance_to(self, t: float) -> int:
+        """Take the whole steps that do not pass time ``t`` (s); return how many."""
+        return self.advance(self.steps_until(t))
+
+    # ----------------------------------------------------------------- control
+    def reset(self) -> None:
+        """Back to the configured initial state (clock keeps running); clears a halt."""
+        self._stepper.set_state(**self.config.initial_state._asdict())
+        self.halted = None
+        self._reset_commands()
+
+    def reconfigure(self, config: EngineConfig) -> None:
+        """Switch to ``config`` (already validated), keeping the state and the clock.
+
+        A change of drive starts the new drive from the current motion: velocity
+        drive holds the current w, torque drive starts with zero torque.
+        """
+        if not isinstance(config, EngineConfig):
+            raise ValueError(f'config must be an EngineConfig, got {config!r}')
+        state = self.state
+        time = self.time
+        stepper = self._make_stepper(config, state)
+        old = self.config
+        self.config, self._stepper = config, stepper
+        self._origin, self._steps = time, 0
+        if (config.drive != old.drive
+                or config.max_angular_acceleration != old.max_angular_acceleration):
+            self._reset_commands()
+        self._cache_limits()
+
+    # ----------------------------------------------------------------- health
+    def stable_at(self, omega: float) -> bool:
+        """Whether the free vibration at constant ``omega`` (rad/s) decays or persists."""
+        if self._always_stable:
+            return True
+        stable = self._stability.get(omega)
+        if stable is None:
+            if len(self._stability) > 64:
+                self._stability.clear()
+            stable = self._stability[omega] = modal_analysis(self.config.params, omega).stable
+        return stable
+
+    def health(self) -> Health:
+        """The session's health level and its reason.
+
+        ERROR when halted; WARN when the deflection is above ``warn_fraction`` of the
+        limit, |w| is near a critical speed, or w is in an unstable range; else OK.
+        """
+        cfg, s = self.config, self.state
+        r = self.deflection
+        w = abs(s.omega)
+        values = (('time_s', self.time), ('omega_rad_s', s.omega), ('u_m', s.u), ('v_m', s.v),
+                  ('deflection_m', r), ('deflection_limit_m', cfg.deflection_limit),
+                  ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
+                  ('coupling', cfg.coupling),
+                  *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
+                  ('rejected_commands', self.rejected_commands))
+        if self.halted:
+            return Health(ERROR, self.halted, values)
+        warnings = []
+        if r > cfg.warn_fraction * cfg.deflection_limit:
+            warnings.append(f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
+                            f'the {cfg.deflection_limit * 1e3:.3g} mm limit')
+        for name, wc in self.critical_speeds.items():
+            if abs(w - wc) <= cfg.critical_margin * wc:
+                warnings.append(f'|omega| {w:.4g} rad/s within {cfg.critical_margin:.0%} of '
+                                f'the critical speed {wc:.4g} rad/s '
+                                f'({name.replace("_", " ")})')
+        if not self.stable_at(s.omega):
+            warnings.append(f'omega {s.omega:.4g} rad/s is in an unstable range: '
+                            'the free vibration grows')
+        if warnings:
+            return Health(WARN, '; '.join(warnings), values)
+        return Health(OK, 'running', values)
+
+
+__all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health', 'OK',
+           'STATE_FIELDS', 'SimulationEngine', 'WARN', 'fastest_rate']

@@ -1,0 +1,130 @@
+"""Setpoint shaping: linear interpolation of the stream, delayed, bounded, continuous."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rotrod_core.command import OmegaSetpointShaper
+
+T = 0.01
+
+
+def stream(shaper, omega, n, jitter=0.0, seed=0, start=0.0):
+    """Send omega(k T) arriving at start + k T + jitter (uniform); return the arrivals."""
+    rng = np.random.default_rng(seed)
+    arrivals = []
+    for k in range(n):
+        a = start + k * T + (rng.uniform(-jitter, jitter) if jitter else 0.0)
+        a = max(a, arrivals[-1] if arrivals else start)
+        shaper.command(omega(k * T), a)
+        arrivals.append(a)
+    return arrivals
+
+
+def sample(shaper, t):
+    return np.array([shaper.omega(x) for x in t]), np.array([shaper.omega_dot(x) for x in t])
+
+
+def test_steady_stream_is_its_linear_interpolation_delayed_by_the_delay():
+    sh = OmegaSetpointShaper(10.0)
+    profile = lambda t: 0.5 * math.sin(2 * t)  # noqa: E731
+    stream(sh, profile, 500)
+    t = np.linspace(0.5, 4.8, 3001)
+    w, _ = sample(sh, t)
+    knots = np.arange(500) * T
+    expected = np.interp(t - 2 * T, knots, [profile(x) for x in knots])
+    assert np.max(np.abs(w - expected)) < 1e-12
+    assert sh.interval == pytest.approx(T, rel=1e-9)
+
+
+@pytest.mark.parametrize('jitter', [0.001, 0.003])
+def test_delivery_jitter_does_not_reach_the_angular_acceleration(jitter):
+    a = 0.3                                      # rad/s^2: w = a t
+    sh = OmegaSetpointShaper(10.0)
+    stream(sh, lambda t: a * t, 1500, jitter=jitter, seed=3)
+    t = np.linspace(3.0, 14.9, 4001)
+    w, wd = sample(sh, t)
+    # after the grid fit has a full window, w' is the stream's slope to a few per cent
+    assert np.max(np.abs(wd - a)) < 0.05 * a
+    assert np.max(np.abs(w - a * (t - 2 * T))) < a * 0.1 * T
+
+
+def test_an_isolated_step_ramps_at_the_acceleration_limit():
+    sh = OmegaSetpointShaper(4.0)
+    sh.command(2.0, 1.0)
+    assert sh.omega(1.0) == 0.0
+    assert sh.omega_dot(1.0) == 4.0
+    assert sh.omega(1.25) == pytest.approx(1.0)
+    assert sh.target_reached_at == pytest.approx(1.5)
+    assert sh.omega(3.0) == 2.0 and sh.omega_dot(3.0) == 0.0
+
+
+def test_a_small_step_takes_the_delay_not_the_limit():
+    sh = OmegaSetpointShaper(100.0)
+    sh.command(0.1, 0.0)
+    assert sh.target_reached_at == pytest.approx(2 * sh.nominal_interval)
+
+
+def test_a_new_setpoint_cuts_a_long_ramp_at_once():
+    sh = OmegaSetpointShaper(10.0)
+    sh.command(20.0, 0.0)                        # a 2 s ramp
+    sh.command(0.0, 0.5)                         # changed mind after 0.5 s
+    assert sh.omega(0.5) == pytest.approx(5.0)
+    assert sh.omega_dot(0.5) == -10.0
+    assert sh.omega(1.0) == pytest.approx(0.0)
+    assert sh.omega(2.0) == 0.0
+
+
+def test_angular_velocity_is_continuous_and_acceleration_bounded_under_any_stream():
+    rng = np.random.default_rng(7)
+    limit = 5.0
+    sh = OmegaSetpointShaper(limit)
+    t = 0.0
+    for _ in range(400):
+        t += rng.choice([0.001, 0.01, 0.02, 0.3])
+        sh.command(rng.uniform(-10, 10), t)
+    grid = np.linspace(0, t + 5, 200001)
+    w, wd = sample(sh, grid)
+    assert np.max(np.abs(wd)) <= limit + 1e-12
+    assert np.max(np.abs(np.diff(w))) <= limit * (grid[1] - grid[0]) * (1 + 1e-9)
+
+
+def test_a_pause_starts_a_new_stream():
+    sh = OmegaSetpointShaper(10.0)
+    stream(sh, lambda t: 1.0, 100)
+    sh.command(1.1, 10.0)                        # long after the stream stopped
+    assert sh.omega(10.0) == pytest.approx(1.0)
+    assert sh.target_reached_at == pytest.approx(10.0 + 2 * T)
+
+
+def test_reset_holds_the_given_speed():
+    sh = OmegaSetpointShaper(10.0)
+    sh.command(3.0, 0.0)
+    sh.reset(1.25, 5.0)
+    assert sh.omega(6.0) == 1.25 and sh.omega_dot(6.0) == 0.0 and sh.setpoint == 1.25
+
+
+@pytest.mark.parametrize('value', [math.nan, math.inf, -math.inf, 'fast', None, True])
+def test_bad_setpoints_are_refused(value):
+    sh = OmegaSetpointShaper(10.0)
+    with pytest.raises(ValueError, match='setpoint'):
+        sh.command(value, 0.1)
+
+
+def test_time_must_not_go_back():
+    sh = OmegaSetpointShaper(10.0)
+    sh.command(1.0, 1.0)
+    with pytest.raises(ValueError, match='precedes'):
+        sh.command(1.0, 0.5)
+
+
+@pytest.mark.parametrize('kwargs', [
+    {'max_angular_acceleration': 0.0}, {'max_angular_acceleration': math.inf},
+    {'max_angular_acceleration': 1.0, 'delay': 0.5},
+    {'max_angular_acceleration': 1.0, 'window': 1},
+    {'max_angular_acceleration': 1.0, 'nominal_interval': 1.0},
+])
+def test_bad_configuration_is_refused(kwargs):
+    with pytest.raises(ValueError):
+        OmegaSetpointShaper(**kwargs)
