@@ -13,6 +13,7 @@ PACKAGE = 'rotrod'
 # Executables: `ros2 run rotrod <name>` in a ROS install, `<name>` on PATH in a venv.
 CONSOLE_SCRIPTS = [
     'rotrod = rotrod_core.cli:main',
+    'simulator = rotrod_ros.simulator:main',
 ]
 
 setup(

@@ -1,0 +1,423 @@
+"""rotrod simulator node: the coupled rod-and-hub model in real time over ROS 2 topics.
+
+Node ``rotrod_simulator``. All names below are relative to the node's namespace
+(``--ros-args -r __ns:=/rod1``) except /diagnostics and /clock.
+
+Subscriptions:
+  cmd/omega   std_msgs/Float64   angular-velocity setpoint, rad/s (drive = velocity)
+  cmd/torque  std_msgs/Float64   hub torque, N m (drive = torque; free rotation)
+Publications (every 1/publish_rate of simulated time):
+  joint_states    sensor_msgs/JointState       joint 'hub': theta rad, w rad/s, torque N m
+  tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating)
+  tip/position    geometry_msgs/PointStamped   mass position, m, in frame 'world'
+  frequencies     std_msgs/Float64MultiArray   [f1, f2] Hz at the current w
+  markers         visualization_msgs/MarkerArray  disk, rod, mass, trail (frame 'world')
+  /diagnostics    diagnostic_msgs/DiagnosticArray  OK / WARN / ERROR with the reason
+  /clock          rosgraph_msgs/Clock          simulated time, when real_time_factor != 1
+Services:
+  ~/reset  std_srvs/Trigger   back to the initial state; clears a halt
+  ~/pause  std_srvs/SetBool   true: pause, false: resume
+
+Physics runs in its own thread at a fixed step; each tick integrates in whole steps
+up to the simulated time due now (``real_time_factor`` x wall time), so simulated
+time does not drift from the clock. The ROS executor only handles commands,
+services and parameters. The physics is rotrod_core's :class:`SimulationEngine`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import time
+import traceback
+from collections import deque
+from typing import NamedTuple
+
+import rclpy
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    SetParametersResult,
+)
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, Float64MultiArray
+from std_srvs.srv import SetBool, Trigger
+
+from rotrod_core.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.geometry import rod_centerline, sphere_radius
+from rotrod_core.model import State
+
+from . import messages
+from .pacing import Pacer, StampClock
+from .parameters import ALL_SPECS, SPECS_BY_NAME, Spec, build_settings
+
+NODE_NAME = 'rotrod_simulator'
+MAX_BACKLOG = 1.0
+"""Wall seconds of physics the thread catches up on after a stall; beyond, it skips."""
+IDLE_WAIT = 0.05
+"""Wall seconds between checks while paused or halted."""
+
+
+class ConfigurationError(ValueError):
+    """The node's parameters (e.g. from --params-file) are invalid."""
+
+
+class Sample(NamedTuple):
+    """What is published at one instant."""
+
+    stamp: object
+    state: State
+    torque: float
+    frequencies: tuple
+    position: tuple
+    markers: bool
+
+
+def _descriptor(spec: Spec) -> ParameterDescriptor:
+    d = ParameterDescriptor(name=spec.name, description=spec.description,
+                            read_only=spec.read_only)
+    if spec.choices:
+        d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
+    elif spec.low is not None and spec.integer:
+        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                        step=0)]
+    elif spec.low is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                     to_value=float(spec.high), step=0.0)]
+    return d
+
+
+class SimulatorNode(Node):
+    """The simulator: parameters, topics, services, and the physics thread."""
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        self._values = self._declare_parameters()
+        try:
+            engine_config, self.settings = build_settings(self._values)
+        except ValueError as exc:
+            raise ConfigurationError(str(exc)) from None
+        self.engine = SimulationEngine(engine_config)
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self._paused = False
+        self._overruns = 0
+        self._failure: str | None = None
+        self._pacer = Pacer(self.settings.real_time_factor, 0.0, time.monotonic())
+        self._stamps = StampClock(time.time() if not self.settings.publishes_clock else 0.0)
+        self._countdown = 0
+        self._samples_since_marker = 0
+        self._trail: deque = deque(maxlen=max(1, self.settings.marker_trail_length))
+        self._last_level: int | None = None
+        self._next_diagnostics = 0.0
+        prefix = self.settings.frame_prefix
+        self._rotor_frame, self._world_frame = prefix + 'rotor', prefix + 'world'
+        self._status_name = f'{self.get_fully_qualified_name()}: simulation'
+
+        self._pub_joint = self.create_publisher(JointState, 'joint_states', 10)
+        self._pub_deflection = self.create_publisher(
+            messages.Vector3Stamped, 'tip/deflection', 10)
+        self._pub_position = self.create_publisher(messages.PointStamped, 'tip/position', 10)
+        self._pub_frequencies = self.create_publisher(Float64MultiArray, 'frequencies', 10)
+        self._pub_markers = self.create_publisher(messages.MarkerArray, 'markers', 10)
+        self._pub_diagnostics = self.create_publisher(
+            messages.DiagnosticArray, '/diagnostics', 10)
+        self._pub_clock = self.create_publisher(Clock, '/clock', 10)
+        self.create_subscription(Float64, 'cmd/omega', self._on_omega, 10)
+        self.create_subscription(Float64, 'cmd/torque', self._on_torque, 10)
+        self.create_service(Trigger, '~/reset', self._on_reset)
+        self.create_service(SetBool, '~/pause', self._on_pause)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._thread = threading.Thread(target=self._run, name='rotrod_physics', daemon=True)
+
+    # ----------------------------------------------------------------- parameters
+    def _declare_parameters(self) -> dict:
+        values = {}
+        for spec in ALL_SPECS:
+            try:
+                param = self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+            except ParameterException as exc:
+                raise ConfigurationError(f'parameter {spec.name}: {exc}') from None
+            values[spec.name] = param.value
+        if self.get_parameter('use_sim_time').value:
+            raise ConfigurationError('use_sim_time must be false: the simulator is the clock '
+                                     'source (it publishes /clock when real_time_factor != 1)')
+        return values
+
+    def _on_set_parameters(self, params) -> SetParametersResult:
+        values = dict(self._values)
+        for p in params:
+            if p.name == 'use_sim_time' and p.value:
+                return SetParametersResult(
+                    successful=False, reason='the simulator is the clock source; '
+                                             'use_sim_time must stay false')
+            if p.name in SPECS_BY_NAME:
+                values[p.name] = p.value
+        try:
+            engine_config, settings = build_settings(values)
+        except ValueError as exc:
+            self.get_logger().warning(f'parameter change rejected: {exc}')
+            return SetParametersResult(successful=False, reason=str(exc))
+        with self._lock:
+            if engine_config != self.engine.config:
+                self.engine.reconfigure(engine_config)
+            self._apply_settings(settings)
+            self._values = values
+        changed = ', '.join(f'{p.name}={p.value!r}' for p in params)
+        self.get_logger().info(f'parameters changed: {changed}')
+        return SetParametersResult(successful=True)
+
+    def _apply_settings(self, settings) -> None:
+        old, self.settings = self.settings, settings
+        if settings.real_time_factor != old.real_time_factor:
+            self._restart_clock()
+        self._countdown = min(self._countdown, self._publish_steps)
+        if settings.marker_trail_length != old.marker_trail_length:
+            self._trail = deque(self._trail, maxlen=max(1, settings.marker_trail_length))
+
+    @property
+    def _publish_steps(self) -> int:
+        """Physics steps between publications (publication instants are step instants)."""
+        return max(1, round(self.engine.config.physics_rate / self.settings.publish_rate))
+
+    @property
+    def _marker_every(self) -> int:
+        return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
+
+    # ----------------------------------------------------------------- commands
+    def _command_time(self) -> float | None:
+        """Simulated time at which a command arriving now takes effect."""
+        if self._paused or self.engine.halted or not self._pacer.paced:
+            return None
+        due = self._pacer.sim_time(time.monotonic())
+        return min(due, self.engine.time + MAX_BACKLOG * self._pacer.factor)
+
+    def _on_omega(self, msg: Float64) -> None:
+        with self._lock:
+            try:
+                self.engine.command_omega(msg.data, at=self._command_time())
+            except CommandRejected as exc:
+                self.get_logger().warning(f'cmd/omega rejected: {exc}',
+                                          throttle_duration_sec=1.0)
+
+    def _on_torque(self, msg: Float64) -> None:
+        with self._lock:
+            try:
+                self.engine.command_torque(msg.data, at=self._command_time())
+            except CommandRejected as exc:
+                self.get_logger().warning(f'cmd/torque rejected: {exc}',
+                                          throttle_duration_sec=1.0)
+
+    # ----------------------------------------------------------------- services
+    def _restart_clock(self) -> None:
+        """Re-anchor the wall-to-simulated mapping at the current instant."""
+        self._pacer.anchor(self.settings.real_time_factor, self.engine.time, time.monotonic())
+        if not self.settings.publishes_clock:
+            self._stamps.follow_wall(self.engine.time, time.time())
+
+    def _on_reset(self, request, response):
+        with self._lock:
+            was_halted = self.engine.halted
+            self.engine.reset()
+            self._trail.clear()
+            self._countdown = 0
+            self._restart_clock()
+            t = self.engine.time
+        response.success = True
+        response.message = f'reset to the initial state at simulated time {t:.3f} s'
+        if was_halted:
+            response.message += f' (cleared the halt: {was_halted})'
+        self.get_logger().info(response.message)
+        return response
+
+    def _on_pause(self, request, response):
+        with self._lock:
+            if request.data and not self._paused:
+                self._paused = True
+                response.message = f'paused at simulated time {self.engine.time:.3f} s'
+            elif not request.data and self._paused:
+                self._paused = False
+                self._restart_clock()
+                response.message = f'resumed at simulated time {self.engine.time:.3f} s'
+            else:
+                response.message = 'already ' + ('paused' if self._paused else 'running')
+        response.success = True
+        self.get_logger().info(response.message)
+        return response
+
+    # ----------------------------------------------------------------- physics thread
+    def start(self) -> None:
+        """Start the physics thread."""
+        self._restart_clock()
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop the physics thread (returns when it has ended)."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+
+    def _sample(self) -> Sample:
+        eng = self.engine
+        self._samples_since_marker += 1
+        markers = self.settings.markers and self._samples_since_marker >= self._marker_every
+        if markers:
+            self._samples_since_marker = 0
+        return Sample(messages.stamp(self._stamps.stamp(eng.time)), eng.state, eng.torque,
+                      eng.frequencies(), eng.inertial_position(), markers)
+
+    def _tick(self) -> tuple[list, float]:
+        """Integrate up to the time due now; return the samples to publish and the wait."""
+        eng = self.engine
+        if self._paused or eng.halted:
+            return [], IDLE_WAIT
+        pacer = self._pacer
+        if pacer.paced:
+            now = time.monotonic()
+            target = pacer.sim_time(now)
+            if target - eng.time > MAX_BACKLOG * pacer.factor:
+                self._overruns += 1
+                self.get_logger().warning(
+                    f'fell {target - eng.time:.3f} s of simulated time behind the clock; '
+                    'skipping ahead', throttle_duration_sec=5.0)
+                self._restart_clock()
+                target = eng.time
+        samples = []
+        while True:
+            n = self._countdown
+            if pacer.paced:
+                n = min(n, eng.steps_until(target))
+                if n == 0 and self._countdown > 0:
+                    break
+            done = eng.advance(n)
+            self._countdown -= done
+            if done < n:                      # halted
+                self.get_logger().error(f'simulation halted: {eng.halted}; call ~/reset')
+                break
+            if self._countdown == 0:
+                samples.append(self._sample())
+                self._countdown = self._publish_steps
+                if not pacer.paced:
+                    break
+        wait = 0.0
+        if pacer.paced and not eng.halted:
+            wait = pacer.wall_time(eng.time + self._countdown * eng.dt) - time.monotonic()
+        return samples, wait
+
+    def _run(self) -> None:
+        try:
+            while not self._stop.is_set():
+                with self._lock:
+                    samples, wait = self._tick()
+                    settings, config = self.settings, self.engine.config
+                for sample in samples:
+                    self._publish(sample, settings, config)
+                self._publish_diagnostics()
+                if wait > 0:
+                    self._stop.wait(wait)
+        except Exception as exc:  # report any failure, then stop the physics
+            if self._stop.is_set() or not self.context.ok():
+                return
+            self._failure = f'physics thread failed: {exc!r}'
+            self.get_logger().fatal(self._failure + '\n' + traceback.format_exc())
+            self._publish_diagnostics(force=True)
+
+    # ----------------------------------------------------------------- publishing
+    def _publish(self, s: Sample, settings, config) -> None:
+        st = s.state
+        self._pub_joint.publish(messages.joint_state(s.stamp, st.theta, st.omega, s.torque))
+        self._pub_deflection.publish(messages.deflection(s.stamp, st.u, st.v,
+                                                         self._rotor_frame))
+        self._pub_position.publish(messages.position(s.stamp, s.position, self._world_frame))
+        self._pub_frequencies.publish(messages.frequencies(*s.frequencies))
+        if settings.publishes_clock:
+            self._pub_clock.publish(messages.clock(s.stamp))
+        if s.markers:
+            scale = settings.marker_deflection_scale
+            rod = rod_centerline(config.params, st.u, st.v, st.theta, scale=scale)
+            self._trail.append(tuple(rod[-1]))
+            self._pub_markers.publish(messages.markers(
+                s.stamp, self._world_frame, 'rotrod', disk_radius=settings.disk_radius,
+                theta=st.theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
+                mass_radius=sphere_radius(float(config.params.mass)),
+                trail=list(self._trail)))
+
+    def _publish_diagnostics(self, force: bool = False) -> None:
+        with self._lock:
+            health = self.engine.health()
+            level, message = health.level, health.message
+            if self._failure:
+                level, message = ERROR, self._failure
+            elif self._paused:
+                message = 'paused; ' + message
+            now = time.monotonic()
+            if not force and level == self._last_level and now < self._next_diagnostics:
+                return
+            self._last_level = level
+            self._next_diagnostics = now + 1.0 / self.settings.diagnostics_rate
+            values = (*health.values, ('paused', self._paused),
+                      ('real_time_factor', self.settings.real_time_factor),
+                      ('overruns', self._overruns))
+            stamp = messages.stamp(self._stamps.stamp(self.engine.time))
+        self._pub_diagnostics.publish(messages.diagnostics(
+            stamp, self._status_name, self.get_fully_qualified_name(), level, message, values))
+
+
+def _parser() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(
+        prog='simulator', description=__doc__.split('\n')[0],
+        epilog=__doc__.split('\n', 2)[2] + '\nParameters (--ros-args -p name:=value, or '
+        '--params-file config/table1.yaml):\n' + '\n'.join(
+            f'  {s.name}: {s.description} [default {s.default!r}]' for s in ALL_SPECS),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def make_executor(name: str, context=None):
+    """The rclpy executor named by the ``executor`` parameter."""
+    if name == 'events':
+        from rclpy.experimental import EventsExecutor
+        return EventsExecutor(context=context)
+    return SingleThreadedExecutor(context=context)
+
+
+def main(args: list | None = None) -> int:
+    """Entry point of ``ros2 run rotrod simulator`` and the ``simulator`` console script."""
+    argv = list(sys.argv if args is None else args)
+    _parser().parse_args(remove_ros_args(argv)[1:])
+    rclpy.init(args=argv)
+    node = None
+    try:
+        try:
+            node = SimulatorNode()
+        except ConfigurationError as exc:
+            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
+            return 2
+        executor = make_executor(node.settings.executor)
+        executor.add_node(node)
+        node.start()
+        s, c = node.settings, node.engine.config
+        node.get_logger().info(
+            f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
+            f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
+            f'executor {s.executor}')
+        try:
+            executor.spin()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        return 0
+    finally:
+        if node is not None:
+            node.stop()
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    sys.exit(main())
