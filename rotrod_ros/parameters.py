@@ -108,8 +108,9 @@ NODE_SPECS = (
     Spec('diagnostics_rate', 1.0, 'rate of /diagnostics (also sent on a change of level), '
          'Hz of wall time', 0.01, 100.0),
     Spec('executor', 'single_threaded',
-         'rclpy executor for topics and services: single_threaded | events '
-         '(experimental EventsExecutor); physics runs in its own thread',
+         'rclpy executor for commands, services and parameters: single_threaded | events '
+         '(rclpy\'s experimental EventsExecutor: measured worse, see '
+         'bench/bench_realtime.py); physics runs in its own thread',
          choices=EXECUTORS, read_only=True),
 )
 

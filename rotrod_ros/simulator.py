@@ -43,6 +43,7 @@ from rcl_interfaces.msg import (
 )
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
@@ -63,6 +64,11 @@ MAX_BACKLOG = 1.0
 """Wall seconds of physics the thread catches up on after a stall; beyond, it skips."""
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
+LEAD = 0.002
+"""Wall seconds by which a tick runs ahead of the publications it computes; each
+publication then waits for its due time, so its timing does not depend on how long
+the integration took. A command that arrives within this lead applies at most this
+late."""
 
 
 class ConfigurationError(ValueError):
@@ -72,6 +78,8 @@ class ConfigurationError(ValueError):
 class Sample(NamedTuple):
     """What is published at one instant."""
 
+    due: float | None
+    """Monotonic wall time at which to publish (None: at once)."""
     stamp: object
     state: State
     torque: float
@@ -270,7 +278,8 @@ class SimulatorNode(Node):
         markers = self.settings.markers and self._samples_since_marker >= self._marker_every
         if markers:
             self._samples_since_marker = 0
-        return Sample(messages.stamp(self._stamps.stamp(eng.time)), eng.state, eng.torque,
+        due = self._pacer.wall_time(eng.time) if self._pacer.paced else None
+        return Sample(due, messages.stamp(self._stamps.stamp(eng.time)), eng.state, eng.torque,
                       eng.frequencies(), eng.inertial_position(), markers)
 
     def _tick(self) -> tuple[list, float]:
@@ -281,7 +290,7 @@ class SimulatorNode(Node):
         pacer = self._pacer
         if pacer.paced:
             now = time.monotonic()
-            target = pacer.sim_time(now)
+            target = pacer.sim_time(now + LEAD)
             if target - eng.time > MAX_BACKLOG * pacer.factor:
                 self._overruns += 1
                 self.get_logger().warning(
@@ -308,7 +317,8 @@ class SimulatorNode(Node):
                     break
         wait = 0.0
         if pacer.paced and not eng.halted:
-            wait = pacer.wall_time(eng.time + self._countdown * eng.dt) - time.monotonic()
+            wait = (pacer.wall_time(eng.time + self._countdown * eng.dt) - LEAD
+                    - time.monotonic())
         return samples, wait
 
     def _run(self) -> None:
@@ -318,6 +328,10 @@ class SimulatorNode(Node):
                     samples, wait = self._tick()
                     settings, config = self.settings, self.engine.config
                 for sample in samples:
+                    if sample.due is not None:
+                        early = sample.due - time.monotonic()
+                        if early > 0 and self._stop.wait(early):
+                            return
                     self._publish(sample, settings, config)
                 self._publish_diagnostics()
                 if wait > 0:
@@ -383,6 +397,10 @@ def make_executor(name: str, context=None):
     """The rclpy executor named by the ``executor`` parameter."""
     if name == 'events':
         from rclpy.experimental import EventsExecutor
+        get_logger(NODE_NAME).warning(
+            'executor=events: the experimental EventsExecutor busy-waits on a full core and '
+            'does not stop on SIGINT here (bench/bench_realtime.py); single_threaded is '
+            'the measured better choice')
         return EventsExecutor(context=context)
     return SingleThreadedExecutor(context=context)
 
