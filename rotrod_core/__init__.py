@@ -24,6 +24,7 @@ from .profiles import (
     Eq26Profile,
     Profile,
     RampProfile,
+    SineSweepProfile,
     StepProfile,
     TableProfile,
     make_profile,
@@ -35,7 +36,8 @@ from .stepper import NonFiniteStateError, RealTimeStepper
 __all__ = [
     'BatchResult', 'CampbellDiagram', 'ConstantProfile', 'DEFAULT_HUB_INERTIA',
     'Eq26Profile', 'ModalAnalysis', 'Mode', 'NonFiniteStateError', 'Profile', 'RampProfile',
-    'RealTimeStepper', 'RodParams', 'SimulationResult', 'State', 'StepProfile',
+    'RealTimeStepper', 'RodParams', 'SimulationResult', 'SineSweepProfile', 'State',
+    'StepProfile',
     'TableProfile', 'campbell', 'critical_speed', 'critical_speed_for_profile',
     'disk_inertia', 'dynamic_frequencies', 'make_profile', 'modal_analysis',
     'simulate', 'simulate_batch', 'static_deflection',

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+from scipy.special import fresnel
 
 
 def _finite(owner: str, name: str, value, *, positive=False, nonnegative=False) -> float:
@@ -309,6 +310,106 @@ class RampProfile(Profile):
         return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
+@dataclass(frozen=True)
+class SineSweepProfile(Profile):
+    """Angular velocity oscillating about ``offset`` with a linearly rising frequency.
+
+    For 0 <= t <= duration: w = offset + amplitude sin(phi), phi = 2 pi (f_start t +
+    (f_end - f_start) t^2 / (2 duration)) (a linear chirp); after it w holds its end
+    value. The hub's oscillating angular acceleration w' excites the rod
+    tangentially across the band f_start..f_end: a frequency-response sweep. w starts
+    at ``offset`` (0 by default: from rest).
+
+    Attributes:
+        amplitude: amplitude of w, rad/s.
+        f_start: frequency of the oscillation at t = 0, Hz (>= 0).
+        f_end: frequency at t = duration, Hz (>= 0).
+        duration: length of the sweep, s (> 0).
+        offset: mean angular velocity, rad/s.
+    """
+
+    amplitude: float = 0.2
+    f_start: float = 0.5
+    f_end: float = 4.0
+    duration: float = 30.0
+    offset: float = 0.0
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        for name in ('amplitude', 'offset'):
+            set_(self, name, _finite('SineSweepProfile', name, getattr(self, name)))
+        for name in ('f_start', 'f_end'):
+            set_(self, name, _finite('SineSweepProfile', name, getattr(self, name),
+                                     nonnegative=True))
+        set_(self, 'duration', _finite('SineSweepProfile', 'duration', self.duration,
+                                       positive=True))
+
+    @property
+    def _rate(self) -> float:
+        """Frequency slope (f_end - f_start) / duration, Hz/s."""
+        return (self.f_end - self.f_start) / self.duration
+
+    def _phase(self, tau):
+        return 2 * np.pi * (self.f_start * tau + 0.5 * self._rate * tau * tau)
+
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        tau = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
+        return _out(t, self.offset + self.amplitude * np.sin(self._phase(tau)))
+
+    def omega_dot(self, t):
+        """Angular acceleration, rad/s^2 (0 after the sweep)."""
+        tt = np.asarray(t, dtype=float)
+        tau = np.clip(tt, 0.0, self.duration)
+        rate = 2 * np.pi * (self.f_start + self._rate * tau)
+        wd = self.amplitude * rate * np.cos(self._phase(tau))
+        return _out(t, np.where((tt >= 0) & (tt < self.duration), wd, 0.0))
+
+    def _sine_integral(self, tau):
+        """Integral of sin(phi) from 0 to tau (exact: Fresnel integrals)."""
+        k, f0 = self._rate, self.f_start
+        if k == 0:
+            if f0 == 0:
+                return np.zeros_like(tau)
+            return (1 - np.cos(2 * np.pi * f0 * tau)) / (2 * np.pi * f0)
+        # phi = pi k (tau + f0/k)^2 - pi f0^2 / k; x = sqrt(2 |k|) (tau + f0/k)
+        sign = 1.0 if k > 0 else -1.0
+        scale = math.sqrt(2 * abs(k))
+        c = math.pi * f0 * f0 / k
+
+        def antiderivative(x):
+            s_x, c_x = fresnel(x)
+            return (math.cos(c) * sign * s_x - math.sin(c) * c_x) / scale
+        x0 = scale * f0 / k
+        return antiderivative(scale * (tau + f0 / k)) - antiderivative(x0)
+
+    def angle(self, t):
+        """Hub angle, rad."""
+        tt = np.asarray(t, dtype=float)
+        tau = np.clip(tt, 0.0, self.duration)
+        theta = self.offset * tau + self.amplitude * self._sine_integral(tau)
+        after = np.maximum(tt - self.duration, 0.0) * self.omega(self.duration)
+        return _out(t, theta + after)
+
+    @property
+    def peak(self) -> float:
+        """|offset| + |amplitude| (a bound on |w|), rad/s."""
+        return abs(self.offset) + abs(self.amplitude)
+
+    @property
+    def end_time(self) -> float:
+        """End of the sweep, s."""
+        return self.duration
+
+    def with_peak(self, omega_peak: float) -> SineSweepProfile:
+        """Offset and amplitude scaled together so that |offset| + |amplitude| = omega_peak."""
+        if self.peak == 0:
+            raise ValueError('SineSweepProfile.with_peak: a zero sweep has no shape to scale')
+        scale = omega_peak / self.peak
+        return dataclasses.replace(self, amplitude=self.amplitude * scale,
+                                   offset=self.offset * scale)
+
+
 class TableProfile(Profile):
     """A user table of (time, omega) points, interpolated smoothly (monotone cubic, PCHIP).
 
@@ -397,12 +498,13 @@ PROFILES = {
     'constant': ConstantProfile,
     'step': StepProfile,
     'ramp': RampProfile,
+    'sine_sweep': SineSweepProfile,
     'table': TableProfile,
 }
 
 
 def make_profile(name: str, **kwargs: Any) -> Profile:
-    """Build a profile by name: eq26, constant, step, ramp, table (keyword arguments)."""
+    """Build a profile by name: eq26, constant, step, ramp, sine_sweep, table (keywords)."""
     try:
         cls = PROFILES[name]
     except KeyError:

@@ -9,6 +9,7 @@ from rotrod_core import (
     ConstantProfile,
     Eq26Profile,
     RampProfile,
+    SineSweepProfile,
     StepProfile,
     TableProfile,
     make_profile,
@@ -16,7 +17,9 @@ from rotrod_core import (
 
 PROFILES = [Eq26Profile(), Eq26Profile(period=4.0, omega_max=-1.5), ConstantProfile(1.3),
             StepProfile(2.0, t_step=1.0), RampProfile(2.0, 3.0, t_start=0.5),
-            TableProfile([0, 1, 2.5, 4], [0, 1.0, 1.5, 0.2])]
+            TableProfile([0, 1, 2.5, 4], [0, 1.0, 1.5, 0.2]),
+            SineSweepProfile(0.3, 0.5, 3.0, duration=5.5, offset=1.0),
+            SineSweepProfile(0.2, 4.0, 1.0, duration=6.5), SineSweepProfile(0.1, 2.0, 2.0)]
 
 
 def test_eq26_matches_model_md():
@@ -104,3 +107,17 @@ def test_table_from_csv(tmp_path):
 def test_bad_profiles_are_rejected(make):
     with pytest.raises(ValueError):
         make()
+
+
+def test_sine_sweep_is_a_linear_chirp():
+    p = SineSweepProfile(amplitude=0.2, f_start=0.5, f_end=4.0, duration=30.0)
+    assert p.omega(0.0) == 0.0 and p.omega_dot(0.0) == pytest.approx(0.2 * 2 * math.pi * 0.5)
+    # instantaneous frequency = f_start + (f_end - f_start) t / T: zero crossings of w
+    t = np.linspace(0, 30, 3_000_001)
+    w = p.omega(t)
+    crossings = t[1:][np.sign(w[1:]) != np.sign(w[:-1])]
+    # the number of half cycles is 2 * integral of f = 2 (0.5 + 4) / 2 * 30 = 135
+    assert len(crossings) == pytest.approx(135, abs=1)
+    assert p.omega(40.0) == p.omega(30.0) and p.omega_dot(40.0) == 0.0
+    assert p.peak == 0.2 and p.end_time == 30.0
+    assert make_profile('sine_sweep', amplitude=0.1).amplitude == 0.1
