@@ -14,6 +14,8 @@ PACKAGE = 'rotrod'
 CONSOLE_SCRIPTS = [
     'rotrod = rotrod_core.cli:main',
     'simulator = rotrod_ros.simulator:main',
+    'profile_publisher = rotrod_ros.profile_publisher:main',
+    'rerun_logger = rotrod_ros.rerun_logger:main',
 ]
 
 setup(

@@ -153,7 +153,17 @@ def cmd_critical(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    """The paper's Eq. 26 scenario offline, with a per-stage summary."""
+    """The paper's Eq. 26 scenario through the ROS nodes (or offline), per-stage summary."""
+    if not args.offline:
+        # the nodes' orchestration lives with the nodes (rotrod_ros); it runs them as
+        # processes and imports no ROS client library itself
+        from rotrod_ros import demo
+        try:
+            demo.run(args.output, speed=args.speed, real_time=args.real_time)
+        except demo.DemoError as exc:
+            print(f'rotrod demo: {exc}', file=sys.stderr)
+            return 1
+        return 0
     params = RodParams()
     profile = make_profile('eq26', period=15.0, omega_max=2.0)
     run = simulate(params, profile, 40.0, dt=1e-3)
@@ -203,8 +213,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--dt', type=_finite, default=2e-3, help='step [s]')
     p.set_defaults(func=cmd_critical)
 
-    p = sub.add_parser('demo', help="the paper's spin-up scenario with a stage summary")
-    p.add_argument('--out', default='out', help='output directory (default ./out)')
+    p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
+                                    'to a Rerun recording, with a stage summary')
+    p.add_argument('-o', '--output', default='out/rotrod.rrd',
+                   help='Rerun recording to write (default out/rotrod.rrd)')
+    p.add_argument('--speed', type=_finite, default=None,
+                   help='real-time factor of the simulator (default 5, from config/demo.yaml)')
+    p.add_argument('--real-time', action='store_true',
+                   help='run at wall-clock speed (no /clock)')
+    p.add_argument('--offline', action='store_true',
+                   help='no ROS: run the scenario in rotrod_core only (CSV in --out)')
+    p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
     return parser
 

@@ -61,8 +61,10 @@ class OmegaSetpointShaper:
             than ``max_interval`` is a pause in the stream, after which the next
             setpoint starts a new stream.
         window: number of recent arrivals the grid is fitted to.
-        delay: how many intervals after its grid time a setpoint is reached (>= 1);
-            arrivals later than ``delay - 1`` intervals hold w until they come.
+        delay: how many intervals after its grid time a setpoint is reached (>= 1).
+            Delivery jitter up to ``delay - 1`` intervals does not reach w; a later
+            arrival holds w until it comes. The stream is taken as lossless (reliable
+            delivery): arrivals are numbered in order.
         omega: initial angular velocity, rad/s; time: initial time, s.
     """
 
@@ -141,7 +143,8 @@ class OmegaSetpointShaper:
         skt = sum((kk - k_mean) * (tt - t_mean) for kk, tt in zip(ks, ts))
         slope = min(max(skt / skk, self.min_interval), self.max_interval)
         grid = t0 + t_mean + slope * (k - k0 - k_mean)
-        if not -slope < t - grid < slope:          # lost the phase: resynchronise
+        tolerance = max(1.0, self.delay - 1.0) * slope
+        if not -tolerance < t - grid < tolerance:  # lost the phase: resynchronise
             window.clear()
             window.append((0, t))
             return t

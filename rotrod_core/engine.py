@@ -85,6 +85,9 @@ class EngineConfig:
         warn_fraction: fraction of ``deflection_limit`` above which health is WARN.
         critical_margin: relative distance to a critical speed within which health
             is WARN (0.05 = within 5 %).
+        setpoint_delay: delay of the shaped w behind the setpoint stream, in stream
+            intervals (>= 1); tolerates delivery jitter up to ``setpoint_delay - 1``
+            intervals (see :class:`~rotrod_core.command.OmegaSetpointShaper`).
         initial: initial state by name (u, v, du, dv, theta, omega), as
             ``(name, value)`` pairs or a dict; others zero. Used at start and reset.
     """
@@ -99,6 +102,7 @@ class EngineConfig:
     deflection_limit: float = 0.003
     warn_fraction: float = 0.8
     critical_margin: float = 0.05
+    setpoint_delay: float = 2.0
     initial: tuple = ()
 
     def __post_init__(self):
@@ -117,6 +121,9 @@ class EngineConfig:
              _number('critical_margin', self.critical_margin, nonnegative=True))
         if self.warn_fraction > 1:
             raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
+        if not 1 <= _number('setpoint_delay', self.setpoint_delay) <= 1000:
+            raise ValueError(f'setpoint_delay must be in [1, 1000] intervals, got '
+                             f'{self.setpoint_delay!r}')
         if self.critical_margin >= 1:
             raise ValueError(f'critical_margin must be in [0, 1), got {self.critical_margin!r}')
         rate = fastest_rate(self.params, self.max_omega)
@@ -204,6 +211,7 @@ class SimulationEngine:
     def _reset_commands(self) -> None:
         cfg = self.config
         self._shaper = OmegaSetpointShaper(cfg.max_angular_acceleration,
+                                           delay=cfg.setpoint_delay,
                                            omega=self.state.omega, time=self.time)
         self._torque_schedule: deque = deque()
         self.torque_command = 0.0
@@ -399,7 +407,8 @@ class SimulationEngine:
         self.config, self._stepper = config, stepper
         self._origin, self._steps = time, 0
         if (config.drive != old.drive
-                or config.max_angular_acceleration != old.max_angular_acceleration):
+                or config.max_angular_acceleration != old.max_angular_acceleration
+                or config.setpoint_delay != old.setpoint_delay):
             self._reset_commands()
         self._cache_limits()
 

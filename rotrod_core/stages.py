@@ -32,12 +32,23 @@ def eq26_stages(period: float, t_end: float) -> list:
 
 def stage_extremes(result: SimulationResult, period: float) -> list:
     """Extreme u and v in each Eq. 26 stage of ``result`` (a list of StageExtremes)."""
+    return series_stage_extremes(result.t, result.u, result.v, period)
+
+
+def series_stage_extremes(t, u, v, period: float, t_end: float | None = None) -> list:
+    """Extreme u and v (m) in each Eq. 26 stage of sampled series (t in s from the start).
+
+    Stages end at ``t_end`` (default: the last sample); a stage with no sample is left out.
+    """
+    t, u, v = (np.asarray(x, dtype=float) for x in (t, u, v))
     out = []
-    for name, a, b in eq26_stages(period, float(result.t[-1])):
-        keep = (result.t >= a) & (result.t <= b)
-        u, v = result.u[keep], result.v[keep]
-        out.append(StageExtremes(name, a, b, float(np.min(u)), float(np.max(u)),
-                                 float(np.min(v)), float(np.max(v))))
+    for name, a, b in eq26_stages(period, float(t[-1] if t_end is None else t_end)):
+        keep = (t >= a) & (t <= b)
+        if not np.any(keep):
+            continue
+        uu, vv = u[keep], v[keep]
+        out.append(StageExtremes(name, a, b, float(np.min(uu)), float(np.max(uu)),
+                                 float(np.min(vv)), float(np.max(vv))))
     return out
 
 

@@ -65,7 +65,7 @@ MAX_BACKLOG = 1.0
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
 LEAD = 0.002
-"""Wall seconds by which a tick runs ahead of the publications it computes; each
+"""Wall seconds (at most) by which a tick runs ahead of the publications it computes; each
 publication then waits for its due time, so its timing does not depend on how long
 the integration took. A command that arrives within this lead applies at most this
 late."""
@@ -80,6 +80,8 @@ class Sample(NamedTuple):
 
     due: float | None
     """Monotonic wall time at which to publish (None: at once)."""
+    time: float
+    """Simulated time, s."""
     stamp: object
     state: State
     torque: float
@@ -121,6 +123,7 @@ class SimulatorNode(Node):
         self._pacer = Pacer(self.settings.real_time_factor, 0.0, time.monotonic())
         self._stamps = StampClock(time.time() if not self.settings.publishes_clock else 0.0)
         self._countdown = 0
+        self._published = (0.0, time.monotonic())
         self._samples_since_marker = 0
         self._trail: deque = deque(maxlen=max(1, self.settings.marker_trail_length))
         self._last_level: int | None = None
@@ -196,16 +199,28 @@ class SimulatorNode(Node):
         return max(1, round(self.engine.config.physics_rate / self.settings.publish_rate))
 
     @property
+    def _lead(self) -> float:
+        """Wall seconds a tick runs ahead: LEAD, at most a quarter publish period."""
+        return min(LEAD, 0.25 * self.settings.publish_period / self.settings.real_time_factor)
+
+    @property
     def _marker_every(self) -> int:
         return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
 
     # ----------------------------------------------------------------- commands
     def _command_time(self) -> float | None:
-        """Simulated time at which a command arriving now takes effect."""
+        """Simulated time at which a command arriving now takes effect.
+
+        The latest publication's simulated time plus the wall time since it, at the
+        real-time factor: what a sender saw (the stamps and /clock it received) plus
+        the time it took. It follows the simulation's actual progress, also when the
+        machine cannot keep up with the factor. Never before the engine's time.
+        """
         if self._paused or self.engine.halted or not self._pacer.paced:
             return None
-        due = self._pacer.sim_time(time.monotonic())
-        return min(due, self.engine.time + MAX_BACKLOG * self._pacer.factor)
+        sim, wall = self._published
+        at = sim + (time.monotonic() - wall) * self._pacer.factor
+        return min(max(at, self.engine.time), self.engine.time + self.settings.publish_period)
 
     def _on_omega(self, msg: Float64) -> None:
         with self._lock:
@@ -226,7 +241,9 @@ class SimulatorNode(Node):
     # ----------------------------------------------------------------- services
     def _restart_clock(self) -> None:
         """Re-anchor the wall-to-simulated mapping at the current instant."""
-        self._pacer.anchor(self.settings.real_time_factor, self.engine.time, time.monotonic())
+        now = time.monotonic()
+        self._pacer.anchor(self.settings.real_time_factor, self.engine.time, now)
+        self._published = (self.engine.time, now)
         if not self.settings.publishes_clock:
             self._stamps.follow_wall(self.engine.time, time.time())
 
@@ -279,8 +296,8 @@ class SimulatorNode(Node):
         if markers:
             self._samples_since_marker = 0
         due = self._pacer.wall_time(eng.time) if self._pacer.paced else None
-        return Sample(due, messages.stamp(self._stamps.stamp(eng.time)), eng.state, eng.torque,
-                      eng.frequencies(), eng.inertial_position(), markers)
+        return Sample(due, eng.time, messages.stamp(self._stamps.stamp(eng.time)), eng.state,
+                      eng.torque, eng.frequencies(), eng.inertial_position(), markers)
 
     def _tick(self) -> tuple[list, float]:
         """Integrate up to the time due now; return the samples to publish and the wait."""
@@ -290,7 +307,7 @@ class SimulatorNode(Node):
         pacer = self._pacer
         if pacer.paced:
             now = time.monotonic()
-            target = pacer.sim_time(now + LEAD)
+            target = pacer.sim_time(now + self._lead)
             if target - eng.time > MAX_BACKLOG * pacer.factor:
                 self._overruns += 1
                 self.get_logger().warning(
@@ -317,7 +334,7 @@ class SimulatorNode(Node):
                     break
         wait = 0.0
         if pacer.paced and not eng.halted:
-            wait = (pacer.wall_time(eng.time + self._countdown * eng.dt) - LEAD
+            wait = (pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
                     - time.monotonic())
         return samples, wait
 
@@ -345,6 +362,7 @@ class SimulatorNode(Node):
 
     # ----------------------------------------------------------------- publishing
     def _publish(self, s: Sample, settings, config) -> None:
+        self._published = (s.time, time.monotonic())
         st = s.state
         self._pub_joint.publish(messages.joint_state(s.stamp, st.theta, st.omega, s.torque))
         self._pub_deflection.publish(messages.deflection(s.stamp, st.u, st.v,
@@ -429,6 +447,8 @@ def main(args: list | None = None) -> int:
             executor.spin()
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
+        finally:
+            executor.shutdown()
         return 0
     finally:
         if node is not None:

@@ -460,23 +460,11 @@ class ProcessLauncher:
 def console_script(name: str) -> list[str]:
     """The command for one of the package's console scripts, e.g. ``['.../bin/simulator']``.
 
-    Looked up next to ``sys.executable`` (a venv or pip install), then in
-    ``<prefix>/lib/rotrod`` of a colcon install on ``AMENT_PREFIX_PATH``, then on ``PATH``.
+    Found as :func:`rotrod_ros.install.executable` finds it: beside ``sys.executable``,
+    in ``<prefix>/lib/rotrod`` of a colcon install, then on ``PATH``.
     """
-    candidates = [Path(sys.executable).parent / name]
-    if os.environ.get('AMENT_PREFIX_PATH'):
-        with contextlib.suppress(Exception):
-            from ament_index_python.packages import get_package_prefix
-            candidates.append(Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / name)
-    for cand in candidates:
-        if cand.is_file() and os.access(cand, os.X_OK):
-            return [str(cand)]
-    found = shutil.which(name)
-    if found:
-        return [found]
-    raise FileNotFoundError(f'console script {name!r} not found (looked in '
-                            f'{", ".join(map(str, candidates))} and on PATH); '
-                            'is the package installed (pip install -e . / colcon build)?')
+    from rotrod_ros.install import executable
+    return executable(name)
 
 
 def ros_arguments(*, node_name: str | None = None, namespace: str | None = None,

@@ -1,0 +1,199 @@
+"""The main job: the paper's spin-up scenario through the three ROS nodes.
+
+Starts ``simulator`` (Table 1, faster than real time on /clock by default),
+``rerun_logger`` and ``profile_publisher`` (Eq. 26 for 40 s of simulated time) as
+separate processes with config/table1.yaml and config/demo.yaml, waits for the
+profile to end, stops the logger (which closes the recording) and the simulator,
+reads the recording back and prints, per stage, the extreme u and v beside the
+offline ``simulate`` run of the same profile.
+
+DDS stays on this machine unless the caller set otherwise
+(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; a ROS_DOMAIN_ID is chosen if none is set).
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rotrod_core import RodParams, simulate
+from rotrod_core.alignment import profile_delay
+from rotrod_core.profiles import Eq26Profile
+from rotrod_core.stages import format_stage_table, series_stage_extremes
+
+from . import recording
+from .install import executable, share_file
+
+EXECUTABLES = ('simulator', 'rerun_logger', 'profile_publisher')
+PARAM_FILES = ('config/table1.yaml', 'config/demo.yaml')
+"""Parameter files of every node, in order (later ones override)."""
+
+
+class DemoError(RuntimeError):
+    """The run did not complete (the reason and the nodes' logs are in the message)."""
+
+
+def ros_environment(env: dict) -> dict:
+    """The environment for the nodes: DDS on localhost and a domain id, unless set."""
+    env = dict(env)
+    env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    env.setdefault('ROS_DOMAIN_ID', str(random.randint(1, 100)))
+    return env
+
+
+def node_commands(output: Path, speed: float, real_time: bool) -> dict:
+    """The three commands (name -> argv), with their parameter files and overrides."""
+    files = []
+    for f in PARAM_FILES:
+        files += ['--params-file', str(share_file(f))]
+    sim_over, pub_over = [], []
+    if real_time:
+        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=2.0']
+        pub_over = ['-p', 'use_sim_time:=false']
+    elif speed is not None:
+        sim_over = ['-p', f'real_time_factor:={float(speed)}']
+    return {
+        'simulator': [*executable('simulator'), '--ros-args', *files, *sim_over],
+        'rerun_logger': [*executable('rerun_logger'), '--ros-args', *files,
+                         '-p', f'output:={output}'],
+        'profile_publisher': [*executable('profile_publisher'), '--ros-args', *files,
+                              *pub_over],
+    }
+
+
+class Processes:
+    """The node processes, each logging to its own file."""
+
+    def __init__(self, log_dir: Path, env: dict):
+        self.log_dir, self.env = log_dir, env
+        self.procs: dict = {}
+        log_dir.mkdir(parents=True, exist_ok=True)
+
+    def start(self, name: str, cmd: list) -> subprocess.Popen:
+        """Start ``cmd`` as ``name`` in its own session, output to ``<name>.log``."""
+        log = open(self.log_dir / f'{name}.log', 'w')  # closed in stop()
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env,
+                                start_new_session=True)
+        self.procs[name] = (proc, log)
+        return proc
+
+    def log(self, name: str) -> str:
+        """The output of ``name`` so far."""
+        return (self.log_dir / f'{name}.log').read_text(errors='replace')
+
+    def wait_for_log(self, name: str, text: str, timeout: float) -> None:
+        """Wait until ``text`` appears in the output of ``name`` (DemoError if not)."""
+        proc = self.procs[name][0]
+        deadline = time.monotonic() + timeout
+        while text not in self.log(name):
+            if proc.poll() is not None:
+                raise DemoError(f'{name} exited with {proc.returncode}:\n{self.log(name)}')
+            if time.monotonic() > deadline:
+                raise DemoError(f'{name} did not report "{text}" within {timeout:g} s:\n'
+                                f'{self.log(name)}')
+            time.sleep(0.05)
+
+    def stop(self, name: str, timeout: float = 10.0) -> int | None:
+        """SIGINT, then SIGKILL after ``timeout`` s; return the exit status."""
+        proc, log = self.procs[name]
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        log.close()
+        return proc.returncode
+
+    def stop_all(self) -> None:
+        """Stop every process still running."""
+        for name in list(self.procs):
+            self.stop(name)
+
+
+def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
+        real_time: bool = False, timeout: float | None = None, quiet: bool = False) -> dict:
+    """Run the scenario; return the summary (also printed unless ``quiet``)."""
+    output = Path(output).resolve()
+    if output.exists():
+        output.unlink()
+    say = (lambda *a: None) if quiet else print
+    env = ros_environment(os.environ)
+    cmds = node_commands(output, speed, real_time)
+    factor = 1.0 if real_time else float(speed or 5.0)
+    profile = Eq26Profile(period=15.0, omega_max=2.0)
+    t_run = 40.0
+    timeout = timeout or 60.0 + 3.0 * t_run / factor
+    procs = Processes(output.parent / 'logs', env)
+    say(f'rotrod demo: Eq. 26 (Table 1) through simulator, profile_publisher and '
+        f'rerun_logger; {t_run:g} s of simulated time at {factor:g}x real time '
+        f'(ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}, discovery '
+        f'{env["ROS_AUTOMATIC_DISCOVERY_RANGE"]})')
+    t0 = time.monotonic()
+    try:
+        procs.start('simulator', cmds['simulator'])
+        procs.wait_for_log('simulator', 'ready', 30)
+        procs.start('rerun_logger', cmds['rerun_logger'])
+        procs.wait_for_log('rerun_logger', 'recording to', 30)
+        publisher = procs.start('profile_publisher', cmds['profile_publisher'])
+        try:
+            publisher.wait(timeout)
+        except subprocess.TimeoutExpired:
+            raise DemoError(f'the profile did not end within {timeout:g} s:\n'
+                            f'{procs.log("profile_publisher")}') from None
+        if publisher.returncode != 0:
+            raise DemoError(f'profile_publisher failed:\n{procs.log("profile_publisher")}')
+        time.sleep(1.0 / factor + 0.3)            # the last second of simulated time
+        if procs.stop('rerun_logger') != 0:
+            raise DemoError(f'rerun_logger failed:\n{procs.log("rerun_logger")}')
+        procs.stop('simulator')
+    finally:
+        procs.stop_all()
+    wall = time.monotonic() - t0
+    summary = summarize(output, profile, t_run)
+    summary['wall_s'] = wall
+    say(summary['table'])
+    say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
+        f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
+        f'mm ({summary["dv_rel"]:.2%} of max |v|); stream start at t = '
+        f'{summary["shift"]:.3f} s of the recording')
+    say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
+        f'with: rerun {output}')
+    return summary
+
+
+def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
+    """Stage extremes of the recorded run beside the offline run of the same profile."""
+    t, w = recording.read_series(path, recording.OMEGA)
+    tu, u = recording.read_series(path, recording.U)
+    _, v = recording.read_series(path, recording.V)
+    shift = profile_delay(t, w, profile)
+    keep = (tu - shift >= 0) & (tu - shift <= t_run)
+    tt, uu, vv = tu[keep] - shift, u[keep], v[keep]
+    offline = simulate(RodParams(), profile, t_run, dt=1e-3)
+    du = float(np.max(np.abs(uu - np.interp(tt, offline.t, offline.u))))
+    dv = float(np.max(np.abs(vv - np.interp(tt, offline.t, offline.v))))
+    recorded = series_stage_extremes(tt, uu, vv, profile.period, t_end=t_run)
+    reference = series_stage_extremes(offline.t, offline.u, offline.v, profile.period)
+    return {'table': format_stage_table(recorded, reference), 'shift': shift,
+            'du': du, 'dv': dv, 'du_rel': du / float(np.max(offline.u)),
+            'dv_rel': dv / float(np.max(np.abs(offline.v))), 'samples': int(len(t)),
+            'stages': recorded, 'reference': reference, 'covered': float(tt[-1] - tt[0])}
+
+
+def main(argv: list | None = None) -> int:
+    """``python -m rotrod_ros.demo`` (the same as ``rotrod demo``)."""
+    from rotrod_core.cli import main as cli_main
+    return cli_main(['demo', *(sys.argv[1:] if argv is None else argv)])
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,211 @@
+"""rotrod profile publisher: streams an angular-velocity profile on cmd/omega.
+
+Node ``rotrod_profile_publisher``. Publishes std_msgs/Float64 (rad/s) on ``cmd/omega``
+(relative: follows the namespace) at ``rate`` Hz of the node clock, so under
+``use_sim_time`` it follows /clock. Sample k carries w(k / rate) of the profile: the
+stream is the profile sampled on a regular grid, whatever the timer's jitter.
+
+It waits until a subscriber is matched, then streams for ``duration`` seconds (0: to
+the profile's end), logs start and end, and exits, unless ``loop`` (start over) or
+``hold`` (keep publishing the last value) is set.
+
+Profiles (rotrod_core.profiles): eq26 (period, omega_max: MODEL.md's Eq. 26),
+constant (omega_max), step (omega_before -> omega_max at t_step), ramp (0 -> omega_max
+over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
+f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+import rclpy
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+from std_msgs.msg import Float64
+
+from rotrod_core.profiles import (
+    ConstantProfile,
+    Eq26Profile,
+    Profile,
+    RampProfile,
+    SineSweepProfile,
+    StepProfile,
+    TableProfile,
+)
+
+NODE_NAME = 'rotrod_profile_publisher'
+
+# name, default, description (unit), (low, high) or None
+PARAMETERS = (
+    ('profile', 'eq26', 'eq26 | constant | step | ramp | sine_sweep | table', None),
+    ('period', 15.0, 'eq26: stage length T, s', (0.0, 1e6)),
+    ('omega_max', 2.0, 'eq26 and ramp: top speed; constant: the speed; step: the speed '
+                       'after the step, rad/s', (-1e4, 1e4)),
+    ('omega_before', 0.0, 'step: the speed before the step, rad/s', (-1e4, 1e4)),
+    ('t_step', 1.0, 'step: time of the step, s', (0.0, 1e6)),
+    ('ramp_time', 15.0, 'ramp: duration of the ramp, s', (0.0, 1e6)),
+    ('t_start', 0.0, 'ramp: start of the ramp, s', (0.0, 1e6)),
+    ('amplitude', 0.2, 'sine_sweep: amplitude of w, rad/s', (-1e4, 1e4)),
+    ('f_start', 0.5, 'sine_sweep: frequency at the start, Hz', (0.0, 1e4)),
+    ('f_end', 4.0, 'sine_sweep: frequency at the end, Hz', (0.0, 1e4)),
+    ('sweep_time', 30.0, 'sine_sweep: duration of the sweep, s', (0.0, 1e6)),
+    ('offset', 0.0, 'sine_sweep: mean speed, rad/s', (-1e4, 1e4)),
+    ('table_file', '', 'table: CSV file of (time s, omega rad/s) rows', None),
+    ('rate', 100.0, 'publishing rate, Hz of the node clock', (0.0, 1e5)),
+    ('duration', 0.0, 'how long to stream, s of the node clock; 0 = to the profile\'s end',
+     (0.0, 1e9)),
+    ('loop', False, 'start the profile over at the end', None),
+    ('hold', False, 'after the end, keep publishing the last value until stopped', None),
+)
+
+
+class ConfigurationError(ValueError):
+    """The publisher's parameters are invalid."""
+
+
+def make_profile(values: dict) -> Profile:
+    """The profile described by the parameter values (raises ValueError with the reason)."""
+    name = values['profile']
+    if name == 'eq26':
+        return Eq26Profile(period=values['period'], omega_max=values['omega_max'])
+    if name == 'constant':
+        return ConstantProfile(values['omega_max'])
+    if name == 'step':
+        return StepProfile(values['omega_max'], t_step=values['t_step'],
+                           omega_before=values['omega_before'])
+    if name == 'ramp':
+        return RampProfile(values['omega_max'], values['ramp_time'], t_start=values['t_start'])
+    if name == 'sine_sweep':
+        return SineSweepProfile(values['amplitude'], values['f_start'], values['f_end'],
+                                duration=values['sweep_time'], offset=values['offset'])
+    if name == 'table':
+        if not values['table_file']:
+            raise ValueError('profile table needs the parameter table_file')
+        return TableProfile.from_csv(values['table_file'])
+    raise ValueError(f"profile must be one of eq26, constant, step, ramp, sine_sweep, table; "
+                     f"got {name!r}")
+
+
+class ProfilePublisher(Node):
+    """Streams a profile on cmd/omega on the node clock."""
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        values = {}
+        for name, default, description, bounds in PARAMETERS:
+            d = ParameterDescriptor(description=description, read_only=True)
+            if bounds:
+                d.floating_point_range = [FloatingPointRange(from_value=bounds[0],
+                                                             to_value=bounds[1], step=0.0)]
+            try:
+                values[name] = self.declare_parameter(name, default, d).value
+            except ParameterException as exc:
+                raise ConfigurationError(f'parameter {name}: {exc}') from None
+        try:
+            self.profile = make_profile(values)
+        except ValueError as exc:
+            raise ConfigurationError(str(exc)) from None
+        if not values['rate'] > 0:
+            raise ConfigurationError(f'rate must be > 0 Hz, got {values["rate"]!r}')
+        self.rate = values['rate']
+        self.duration = values['duration'] or (self.profile.end_time or 0.0)
+        self.loop, self.hold = values['loop'], values['hold']
+        self.name = values['profile']
+        self.done = False
+        self._start = None
+        self._last_k = -1
+        self.published = 0
+        self._waiting_logged = False
+        self._pub = self.create_publisher(Float64, 'cmd/omega', 10)
+        self._timer = self.create_timer(1.0 / self.rate, self._on_timer)
+
+    @property
+    def samples(self) -> int:
+        """Index of the last sample of one pass (at ``duration``)."""
+        return max(0, round(self.duration * self.rate))
+
+    def _on_timer(self) -> None:
+        if self.done:
+            return
+        now = self.get_clock().now().nanoseconds * 1e-9
+        if self._start is None:
+            if self._pub.get_subscription_count() == 0:
+                if not self._waiting_logged:
+                    self.get_logger().info('waiting for a subscriber on '
+                                           f'{self._pub.topic_name}')
+                    self._waiting_logged = True
+                return
+            self._start = now
+            self.get_logger().info(
+                f'start: streaming {self.name} {self.profile!r} on {self._pub.topic_name} at '
+                f'{self.rate:g} Hz for {self.duration:g} s')
+        due = math.floor((now - self._start) * self.rate + 1e-6)
+        end = self.samples
+        # every sample in order, none skipped: a late timer sends the missed ones now
+        for k in range(self._last_k + 1, due + 1):
+            t = min(k, end) / self.rate
+            self._pub.publish(Float64(data=float(self.profile.omega(t))))
+            self.published += 1
+            self._last_k = k
+            if k >= end and not self.hold:
+                if self.loop:
+                    self._start += (end + 1) / self.rate
+                    self._last_k = -1
+                    self.get_logger().info('end of the profile: starting over (loop)')
+                else:
+                    self.done = True
+                    self.get_logger().info(f'end: published {self.published} samples over '
+                                           f'{self.duration:g} s')
+                return
+
+    def flush(self, timeout: float = 2.0) -> bool:
+        """Wait until subscribers have acknowledged every sample (reliable QoS)."""
+        return self._pub.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
+
+
+def _parser() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(
+        prog='profile_publisher', description=__doc__.split('\n')[0],
+        epilog=__doc__.split('\n', 2)[2] + '\nParameters:\n' + '\n'.join(
+            f'  {n}: {d} [default {v!r}]' for n, v, d, _ in PARAMETERS),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def main(args: list | None = None) -> int:
+    """Entry point of ``ros2 run rotrod profile_publisher``."""
+    argv = list(sys.argv if args is None else args)
+    _parser().parse_args(remove_ros_args(argv)[1:])
+    rclpy.init(args=argv)
+    node = None
+    try:
+        try:
+            node = ProfilePublisher()
+        except ConfigurationError as exc:
+            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
+            return 2
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        try:
+            while rclpy.ok() and not node.done:
+                executor.spin_once(timeout_sec=0.1)
+            if node.done:
+                node.flush()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            executor.shutdown()
+        return 0
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    sys.exit(main())

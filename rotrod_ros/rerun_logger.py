@@ -1,0 +1,147 @@
+"""rotrod Rerun logger: records the simulator's topics to a Rerun file, headlessly.
+
+Node ``rotrod_rerun_logger``. Subscribes (relative names) to joint_states,
+tip/deflection, tip/position, frequencies and frequencies/estimate, and writes
+``output`` (a .rrd file) with time on the message stamps and a default blueprint,
+so the file opens as a dashboard: ``rerun rotrod.rrd``. With ``serve:=true`` it also
+serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``).
+
+Data is sent in batches every ``flush_period`` seconds; on SIGINT, SIGTERM or the end
+of the run the last batch is written and the file closed, so ``rerun rrd verify``
+accepts it and it holds the data up to the signal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import rclpy
+from geometry_msgs.msg import PointStamped, Vector3Stamped
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from .messages import to_seconds
+from .recording import RecordingWriter
+
+NODE_NAME = 'rotrod_rerun_logger'
+QOS_DEPTH = 1000
+"""Subscription queue depth: a burst of publications is not dropped."""
+
+PARAMETERS = (
+    ('output', 'rotrod.rrd', 'path of the Rerun recording to write'),
+    ('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
+    ('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)'),
+    ('flush_period', 0.25, 'seconds of wall time between writes of the buffered data'),
+)
+
+
+class ConfigurationError(ValueError):
+    """The logger's parameters are invalid."""
+
+
+class RerunLogger(Node):
+    """Subscribes to a simulator's topics and writes them with :class:`RecordingWriter`."""
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        values = {name: self.declare_parameter(
+            name, default, ParameterDescriptor(description=text, read_only=True)).value
+            for name, default, text in PARAMETERS}
+        if not values['output']:
+            raise ConfigurationError('output must name a file')
+        if not 0 < values['flush_period'] <= 60:
+            raise ConfigurationError(f'flush_period must be in (0, 60] s, got '
+                                     f'{values["flush_period"]!r}')
+        if not 0 < values['serve_port'] < 65536:
+            raise ConfigurationError(f'serve_port must be a TCP port, got {values["serve_port"]}')
+        try:
+            self.writer = RecordingWriter(values['output'],
+                                          serve_port=values['serve_port'] if values['serve']
+                                          else None)
+        except Exception as exc:  # rerun raises several kinds for a bad path or port
+            raise ConfigurationError(f'cannot open the recording: {exc}') from None
+        self._last_stamp: float | None = None
+        self.create_subscription(JointState, 'joint_states', self._on_joint, QOS_DEPTH)
+        self.create_subscription(Vector3Stamped, 'tip/deflection', self._on_deflection,
+                                 QOS_DEPTH)
+        self.create_subscription(PointStamped, 'tip/position', self._on_position, QOS_DEPTH)
+        self.create_subscription(Float64MultiArray, 'frequencies',
+                                 lambda m: self._on_frequencies(m, False), QOS_DEPTH)
+        self.create_subscription(Float64MultiArray, 'frequencies/estimate',
+                                 lambda m: self._on_frequencies(m, True), QOS_DEPTH)
+        self._timer = self.create_timer(values['flush_period'], self.writer.flush,
+                                        clock=rclpy.clock.Clock())   # wall time
+        where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
+        self.get_logger().info(f'recording to {self.writer.path}{where}')
+
+    def _on_joint(self, msg: JointState) -> None:
+        if 'hub' not in msg.name:
+            return
+        i = list(msg.name).index('hub')
+        t = to_seconds(msg.header.stamp)
+        self._last_stamp = t
+        self.writer.add_state(t, msg.velocity[i], msg.effort[i])
+
+    def _on_deflection(self, msg: Vector3Stamped) -> None:
+        self.writer.add_deflection(to_seconds(msg.header.stamp), msg.vector.x, msg.vector.y)
+
+    def _on_position(self, msg: PointStamped) -> None:
+        p = msg.point
+        self.writer.add_position(to_seconds(msg.header.stamp), p.x, p.y, p.z)
+
+    def _on_frequencies(self, msg: Float64MultiArray, estimate: bool) -> None:
+        # Float64MultiArray has no stamp: it is published with the joint state of the
+        # same instant, so it takes that stamp.
+        if self._last_stamp is None or len(msg.data) < 2:
+            return
+        self.writer.add_frequencies(self._last_stamp, msg.data[0], msg.data[1], estimate)
+
+    def close(self) -> None:
+        """Write what is buffered and close the file."""
+        self.writer.close()
+        self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
+
+
+def _parser() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(
+        prog='rerun_logger', description=__doc__.split('\n')[0],
+        epilog=__doc__.split('\n', 2)[2] + '\nParameters:\n' + '\n'.join(
+            f'  {n}: {d} [default {v!r}]' for n, v, d in PARAMETERS),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def main(args: list | None = None) -> int:
+    """Entry point of ``ros2 run rotrod rerun_logger``."""
+    argv = list(sys.argv if args is None else args)
+    _parser().parse_args(remove_ros_args(argv)[1:])
+    rclpy.init(args=argv)
+    node = None
+    try:
+        try:
+            node = RerunLogger()
+        except ConfigurationError as exc:
+            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
+            return 2
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        try:
+            executor.spin()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            executor.shutdown()
+        return 0
+    finally:
+        if node is not None:
+            node.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    sys.exit(main())
