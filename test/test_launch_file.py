@@ -1,0 +1,49 @@
+"""The launch file (for a full ROS 2 install) starts what ``rotrod demo`` starts.
+
+``launch`` is not on PyPI, so the file is read, not run: its Node actions must name
+the demo's three executables of this package, and its parameter files must be the
+demo's, in the same order; and it must be installed with the package.
+"""
+
+import ast
+from pathlib import Path
+
+import setup_py
+
+from rotrod_ros import demo
+
+ROOT = Path(__file__).resolve().parent.parent
+LAUNCH = ROOT / 'launch' / 'demo.launch.py'
+
+
+def node_calls(tree):
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and getattr(node.func, 'id', None) == 'Node':
+            yield {kw.arg: kw.value for kw in node.keywords}
+
+
+def test_launch_file_names_the_demos_executables_and_parameter_files():
+    tree = ast.parse(LAUNCH.read_text())
+    nodes = list(node_calls(tree))
+    assert sorted(ast.literal_eval(n['executable']) for n in nodes) == sorted(demo.EXECUTABLES)
+    assert all(ast.literal_eval(n['package']) == 'rotrod' for n in nodes)
+    assert all(isinstance(n['parameters'], ast.Name) and n['parameters'].id == 'params'
+               for n in nodes)
+    names = [c for c in ast.walk(tree) if isinstance(c, ast.Tuple)
+             and all(isinstance(e, ast.Constant) and str(e.value).endswith('.yaml')
+                     for e in c.elts)]
+    (files,) = names
+    assert [f'config/{e.value}' for e in files.elts] == list(demo.PARAM_FILES)
+    for f in demo.PARAM_FILES:
+        assert (ROOT / f).is_file()
+    # node names match the parameter files' keys (/**/<node name>)
+    for n in nodes:
+        key = f'/**/{ast.literal_eval(n["name"])}:'
+        assert key in (ROOT / 'config' / 'demo.yaml').read_text()
+    compile(LAUNCH.read_text(), str(LAUNCH), 'exec')
+
+
+def test_launch_file_is_installed_with_the_package():
+    assert "('share/' + PACKAGE + '/launch', glob('launch/*.launch.py'))" in (
+        ROOT / 'setup.py').read_text()
+    assert setup_py.constants()['PACKAGE'] == 'rotrod'
