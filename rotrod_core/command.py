@@ -3,17 +3,18 @@
 A drive cannot follow a setpoint stream literally: a jump of w is an infinite
 angular acceleration. :class:`OmegaSetpointShaper` makes w(t) continuous and
 piecewise linear, w'(t) piecewise constant and never beyond
-``max_angular_acceleration``, by linear interpolation of the stream delayed by one
-setpoint interval:
+``max_angular_acceleration``, by linear interpolation of the stream delayed by a
+fixed lag D:
 
 - the stream's interval T is estimated from the arrival times;
-- arrivals are placed on a regular grid fitted to the recent ones (least squares),
-  so that delivery jitter of less than T does not reach w;
-- setpoint k is reached at its grid time + T, by a ramp from setpoint k - 1.
+- arrivals are placed on a regular grid fitted to the recent ones (least-squares
+  interval, phase from the punctual arrivals), so that delivery jitter and stalls
+  shorter than D - T do not reach w;
+- setpoint k is reached at its grid time + D, by a ramp from setpoint k - 1.
 
 A profile streamed at a steady rate is thus reproduced as its linear interpolation
-delayed by T, even with jittery delivery; an isolated step (after a pause in the
-stream) becomes a ramp over one interval or at the acceleration limit.
+delayed by D, even with jittery delivery; an isolated step (after a pause in the
+stream) becomes a ramp over D, or longer at the acceleration limit.
 """
 
 from __future__ import annotations
@@ -22,6 +23,11 @@ import math
 from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
+
+import numpy as np
+
+PHASE_QUANTILE = 0.1
+"""Quantile of the arrivals' offsets from the fitted line that sets the grid's phase."""
 
 
 def _finite(name: str, value, *, positive: bool = False) -> float:
@@ -50,6 +56,13 @@ class Ramp:
         return self.omega_start + self.rate * (min(t, self.end) - self.start)
 
 
+def _fit_line(x, y) -> tuple:
+    """Least-squares slope of y(x) and the fitted values."""
+    xm, ym = x.mean(), y.mean()
+    slope = float(np.dot(x - xm, y - ym) / np.dot(x - xm, x - xm))
+    return slope, ym + slope * (x - xm)
+
+
 class OmegaSetpointShaper:
     """Continuous w(t) from timestamped angular-velocity setpoints.
 
@@ -61,16 +74,17 @@ class OmegaSetpointShaper:
             than ``max_interval`` is a pause in the stream, after which the next
             setpoint starts a new stream.
         window: number of recent arrivals the grid is fitted to.
-        delay: how many intervals after its grid time a setpoint is reached (>= 1).
-            Delivery jitter up to ``delay - 1`` intervals does not reach w; a later
-            arrival holds w until it comes. The stream is taken as lossless (reliable
-            delivery): arrivals are numbered in order.
+        delay: how long after its grid time a setpoint is reached, s (a fixed lag;
+            at least two stream intervals). Delivery jitter and stalls up to
+            ``delay`` minus one interval do not reach w; a later arrival holds w
+            until it comes. The stream is taken as lossless (reliable delivery):
+            arrivals are numbered in order.
         omega: initial angular velocity, rad/s; time: initial time, s.
     """
 
     def __init__(self, max_angular_acceleration: float, *, nominal_interval: float = 0.01,
                  min_interval: float = 1e-4, max_interval: float = 0.25,
-                 window: int = 200, delay: float = 2.0, omega: float = 0.0, time: float = 0.0):
+                 window: int = 1000, delay: float = 0.02, omega: float = 0.0, time: float = 0.0):
         self.max_angular_acceleration = _finite(
             'max_angular_acceleration', max_angular_acceleration, positive=True)
         self.nominal_interval = _finite('nominal_interval', nominal_interval, positive=True)
@@ -82,8 +96,6 @@ class OmegaSetpointShaper:
             raise ValueError(f'window must be an integer >= 2, got {window!r}')
         self.window = window
         self.delay = _finite('delay', delay, positive=True)
-        if self.delay < 1:
-            raise ValueError(f'delay must be >= 1 interval, got {delay!r}')
         self.reset(omega, time)
 
     def reset(self, omega: float = 0.0, time: float = 0.0) -> None:
@@ -121,8 +133,10 @@ class OmegaSetpointShaper:
     def _place_on_grid(self, t: float) -> float:
         """Grid time of a setpoint arriving at ``t``; updates the interval estimate.
 
-        The grid is the least-squares line through the stream's recent arrivals
-        (arrival number -> time), so its phase and interval average the jitter out.
+        The interval is the slope of the least-squares line through the stream's
+        recent arrivals (arrival number -> time). Delivery delays are one-sided (late,
+        in bursts after a stall), so the grid's phase is the line moved down to a low
+        quantile of the arrivals, not their mean: the punctual arrivals set it.
         """
         window = self._window
         if self._last_arrival is not None and t - self._last_arrival > self.max_interval:
@@ -135,15 +149,20 @@ class OmegaSetpointShaper:
         n = len(window)
         if n < 2:
             return t
-        k0, t0 = window[0]
-        ks = [kk - k0 for kk, _ in window]
-        ts = [tt - t0 for _, tt in window]
-        k_mean, t_mean = sum(ks) / n, sum(ts) / n
-        skk = sum((kk - k_mean) ** 2 for kk in ks)
-        skt = sum((kk - k_mean) * (tt - t_mean) for kk, tt in zip(ks, ts))
-        slope = min(max(skt / skk, self.min_interval), self.max_interval)
-        grid = t0 + t_mean + slope * (k - k0 - k_mean)
-        tolerance = max(1.0, self.delay - 1.0) * slope
+        data = np.array(window, dtype=float)
+        ks = data[:, 0] - data[0, 0]
+        ts = data[:, 1] - data[0, 1]
+        slope, line = _fit_line(ks, ts)
+        if n >= 10:
+            # refit through the punctual half: late bursts do not tilt the grid
+            punctual = ts - line <= np.median(ts - line)
+            if np.count_nonzero(punctual) >= 2 and np.ptp(ks[punctual]) > 0:
+                slope, _ = _fit_line(ks[punctual], ts[punctual])
+                line = np.mean(ts[punctual]) + slope * (ks - np.mean(ks[punctual]))
+        slope = min(max(slope, self.min_interval), self.max_interval)
+        phase = float(np.quantile(ts - line, PHASE_QUANTILE)) if n >= 10 else 0.0
+        grid = data[0, 1] + line[-1] + phase
+        tolerance = max(self.delay - slope, slope)
         if not -tolerance < t - grid < tolerance:  # lost the phase: resynchronise
             window.clear()
             window.append((0, t))
@@ -164,7 +183,7 @@ class OmegaSetpointShaper:
             raise ValueError(f'setpoint time {t} s precedes the previous one '
                              f'({self._last_arrival} s)')
         t = max(t, self._starts[0])
-        lag = self.delay * self.interval
+        lag = self.delay
         deadline = self._place_on_grid(t) + lag
         previous_end = self._ramps[-1].end
         start = previous_end if t <= previous_end <= t + lag else t

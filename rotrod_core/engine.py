@@ -85,9 +85,9 @@ class EngineConfig:
         warn_fraction: fraction of ``deflection_limit`` above which health is WARN.
         critical_margin: relative distance to a critical speed within which health
             is WARN (0.05 = within 5 %).
-        setpoint_delay: delay of the shaped w behind the setpoint stream, in stream
-            intervals (>= 1); tolerates delivery jitter up to ``setpoint_delay - 1``
-            intervals (see :class:`~rotrod_core.command.OmegaSetpointShaper`).
+        setpoint_delay: lag of the shaped w behind the setpoint stream, s (at least
+            two stream intervals); delivery jitter up to the lag minus one interval
+            does not reach w (see :class:`~rotrod_core.command.OmegaSetpointShaper`).
         initial: initial state by name (u, v, du, dv, theta, omega), as
             ``(name, value)`` pairs or a dict; others zero. Used at start and reset.
     """
@@ -102,7 +102,7 @@ class EngineConfig:
     deflection_limit: float = 0.003
     warn_fraction: float = 0.8
     critical_margin: float = 0.05
-    setpoint_delay: float = 2.0
+    setpoint_delay: float = 0.02
     initial: tuple = ()
 
     def __post_init__(self):
@@ -121,8 +121,8 @@ class EngineConfig:
              _number('critical_margin', self.critical_margin, nonnegative=True))
         if self.warn_fraction > 1:
             raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
-        if not 1 <= _number('setpoint_delay', self.setpoint_delay) <= 1000:
-            raise ValueError(f'setpoint_delay must be in [1, 1000] intervals, got '
+        if not 0 < _number('setpoint_delay', self.setpoint_delay) <= 10:
+            raise ValueError(f'setpoint_delay must be in (0, 10] s, got '
                              f'{self.setpoint_delay!r}')
         if self.critical_margin >= 1:
             raise ValueError(f'critical_margin must be in [0, 1), got {self.critical_margin!r}')

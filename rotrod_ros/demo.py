@@ -55,7 +55,7 @@ def node_commands(output: Path, speed: float, real_time: bool) -> dict:
         files += ['--params-file', str(share_file(f))]
     sim_over, pub_over = [], []
     if real_time:
-        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=2.0']
+        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=0.02']
         pub_over = ['-p', 'use_sim_time:=false']
     elif speed is not None:
         sim_over = ['-p', f'real_time_factor:={float(speed)}']

@@ -84,9 +84,9 @@ ENGINE_SPECS = (
     Spec('critical_margin', _ENGINE.critical_margin,
          'relative distance to a critical speed within which diagnostics WARN, 1', 0.0, 1.0),
     Spec('setpoint_delay', _ENGINE.setpoint_delay,
-         'delay of w behind the cmd/omega stream, in stream intervals (>= 1); absorbs '
-         'delivery jitter up to setpoint_delay - 1 intervals (raise it at high '
-         'real_time_factor)', 1.0, 1000.0),
+         'lag of w behind the cmd/omega stream, s (at least two stream intervals); '
+         'absorbs delivery jitter up to the lag minus one interval (raise it at a high '
+         'real_time_factor)', 0.0, 10.0),
     *(Spec(f'initial.{name}', 0.0,
            f'initial {name} ({unit}) at start and after ~/reset')
       for name, unit in zip(STATE_FIELDS, ('m', 'm', 'm/s', 'm/s', 'rad', 'rad/s'))),

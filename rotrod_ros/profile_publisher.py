@@ -24,9 +24,7 @@ import sys
 import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 from std_msgs.msg import Float64
 
 from rotrod_core.profiles import (
@@ -38,6 +36,9 @@ from rotrod_core.profiles import (
     StepProfile,
     TableProfile,
 )
+
+from . import node_main
+from .node_main import ConfigurationError
 
 NODE_NAME = 'rotrod_profile_publisher'
 
@@ -63,10 +64,6 @@ PARAMETERS = (
     ('loop', False, 'start the profile over at the end', None),
     ('hold', False, 'after the end, keep publishing the last value until stopped', None),
 )
-
-
-class ConfigurationError(ValueError):
-    """The publisher's parameters are invalid."""
 
 
 def make_profile(values: dict) -> Profile:
@@ -179,32 +176,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(args: list | None = None) -> int:
     """Entry point of ``ros2 run rotrod profile_publisher``."""
-    argv = list(sys.argv if args is None else args)
-    _parser().parse_args(remove_ros_args(argv)[1:])
-    rclpy.init(args=argv)
-    node = None
-    try:
-        try:
-            node = ProfilePublisher()
-        except ConfigurationError as exc:
-            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
-            return 2
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        try:
-            while rclpy.ok() and not node.done:
-                executor.spin_once(timeout_sec=0.1)
-            if node.done:
-                node.flush()
-        except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        finally:
-            executor.shutdown()
-        return 0
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return node_main.run(NODE_NAME, ProfilePublisher, _parser(), args,
+                         until=lambda node: node.done,
+                         finished=lambda node: node.done and node.flush())
 
 
 if __name__ == '__main__':

@@ -16,16 +16,16 @@ from __future__ import annotations
 import argparse
 import sys
 
-import rclpy
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
+from . import node_main
 from .messages import to_seconds
+from .node_main import ConfigurationError
 from .recording import RecordingWriter
 
 NODE_NAME = 'rotrod_rerun_logger'
@@ -38,10 +38,6 @@ PARAMETERS = (
     ('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)'),
     ('flush_period', 0.25, 'seconds of wall time between writes of the buffered data'),
 )
-
-
-class ConfigurationError(ValueError):
-    """The logger's parameters are invalid."""
 
 
 class RerunLogger(Node):
@@ -75,7 +71,7 @@ class RerunLogger(Node):
         self.create_subscription(Float64MultiArray, 'frequencies/estimate',
                                  lambda m: self._on_frequencies(m, True), QOS_DEPTH)
         self._timer = self.create_timer(values['flush_period'], self.writer.flush,
-                                        clock=rclpy.clock.Clock())   # wall time
+                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         self.get_logger().info(f'recording to {self.writer.path}{where}')
 
@@ -117,30 +113,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(args: list | None = None) -> int:
     """Entry point of ``ros2 run rotrod rerun_logger``."""
-    argv = list(sys.argv if args is None else args)
-    _parser().parse_args(remove_ros_args(argv)[1:])
-    rclpy.init(args=argv)
-    node = None
-    try:
-        try:
-            node = RerunLogger()
-        except ConfigurationError as exc:
-            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
-            return 2
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        try:
-            executor.spin()
-        except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        finally:
-            executor.shutdown()
-        return 0
-    finally:
-        if node is not None:
-            node.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return node_main.run(NODE_NAME, RerunLogger, _parser(), args, finished=RerunLogger.close)
 
 
 if __name__ == '__main__':

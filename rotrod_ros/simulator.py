@@ -34,7 +34,6 @@ import traceback
 from collections import deque
 from typing import NamedTuple
 
-import rclpy
 from rcl_interfaces.msg import (
     FloatingPointRange,
     IntegerRange,
@@ -42,10 +41,9 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.node import Node
-from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -55,7 +53,8 @@ from rotrod_core.engine import ERROR, CommandRejected, SimulationEngine
 from rotrod_core.geometry import rod_centerline, sphere_radius
 from rotrod_core.model import State
 
-from . import messages
+from . import messages, node_main
+from .node_main import ConfigurationError
 from .pacing import Pacer, StampClock
 from .parameters import ALL_SPECS, SPECS_BY_NAME, Spec, build_settings
 
@@ -69,10 +68,6 @@ LEAD = 0.002
 publication then waits for its due time, so its timing does not depend on how long
 the integration took. A command that arrives within this lead applies at most this
 late."""
-
-
-class ConfigurationError(ValueError):
-    """The node's parameters (e.g. from --params-file) are invalid."""
 
 
 class Sample(NamedTuple):
@@ -423,38 +418,20 @@ def make_executor(name: str, context=None):
     return SingleThreadedExecutor(context=context)
 
 
+def _started(node: SimulatorNode) -> None:
+    node.start()
+    s, c = node.settings, node.engine.config
+    node.get_logger().info(
+        f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
+        f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
+        f'executor {s.executor}')
+
+
 def main(args: list | None = None) -> int:
     """Entry point of ``ros2 run rotrod simulator`` and the ``simulator`` console script."""
-    argv = list(sys.argv if args is None else args)
-    _parser().parse_args(remove_ros_args(argv)[1:])
-    rclpy.init(args=argv)
-    node = None
-    try:
-        try:
-            node = SimulatorNode()
-        except ConfigurationError as exc:
-            print(f'{NODE_NAME}: invalid configuration: {exc}', file=sys.stderr)
-            return 2
-        executor = make_executor(node.settings.executor)
-        executor.add_node(node)
-        node.start()
-        s, c = node.settings, node.engine.config
-        node.get_logger().info(
-            f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
-            f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
-            f'executor {s.executor}')
-        try:
-            executor.spin()
-        except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        finally:
-            executor.shutdown()
-        return 0
-    finally:
-        if node is not None:
-            node.stop()
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return node_main.run(NODE_NAME, SimulatorNode, _parser(), args,
+                         make_executor=lambda node: make_executor(node.settings.executor),
+                         started=_started, finished=SimulatorNode.stop)
 
 
 if __name__ == '__main__':

@@ -61,7 +61,7 @@ def test_ramp_follows_the_acceleration_limit_and_torque_is_what_the_drive_suppli
     assert eng.torque == pytest.approx(J * 4.0 - K * s.v * R0, rel=1e-9)
 
 
-@pytest.mark.parametrize('jitter', [0.0, 0.002])
+@pytest.mark.parametrize('jitter', [0.0, 0.004])
 def test_eq26_streamed_at_100_hz_reproduces_the_offline_run(jitter):
     profile = Eq26Profile()
     offline = simulate(RodParams(), profile, 40.0, dt=1e-3)
@@ -69,7 +69,7 @@ def test_eq26_streamed_at_100_hz_reproduces_the_offline_run(jitter):
     rng = np.random.default_rng(11)
     period, samples, last = 0.01, [], 0.0
     for k in range(4001):
-        arrival = max(last, k * period + rng.uniform(-jitter, jitter))
+        arrival = max(last, k * period + rng.uniform(0.0, jitter))   # delivery latency
         last = arrival
         while eng.time + eng.dt <= arrival + 1e-12:
             eng.step()

@@ -1,0 +1,70 @@
+"""The common ``main`` of the package's nodes: arguments, init, spin, clean shutdown."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.utilities import remove_ros_args
+
+
+class ConfigurationError(ValueError):
+    """A node's parameters are invalid: it exits with status 2 and the reason."""
+
+
+def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
+        args: list | None = None, *, make_executor: Callable | None = None,
+        until: Callable | None = None, started: Callable | None = None,
+        finished: Callable | None = None) -> int:
+    """Parse non-ROS arguments (``--help``), build the node, spin, shut down cleanly.
+
+    Args:
+        name: node name for error messages.
+        make_node: builds the node (may raise ConfigurationError: exit status 2).
+        parser: the executable's argument parser (for ``--help``).
+        args: argv (default sys.argv).
+        make_executor: executor for the node (default SingleThreadedExecutor).
+        until: spin until it returns true (default: until shutdown).
+        started: called with the node before spinning.
+        finished: called with the node after spinning (also on a signal).
+
+    SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down); an error
+    raised by rclpy while the context is shutting down is part of that, not a failure.
+    """
+    argv = list(sys.argv if args is None else args)
+    parser.parse_args(remove_ros_args(argv)[1:])
+    rclpy.init(args=argv)
+    node = executor = None
+    try:
+        try:
+            node = make_node()
+        except ConfigurationError as exc:
+            print(f'{name}: invalid configuration: {exc}', file=sys.stderr)
+            return 2
+        executor = (make_executor or (lambda n: SingleThreadedExecutor()))(node)
+        executor.add_node(node)
+        if started:
+            started(node)
+        try:
+            if until is None:
+                executor.spin()
+            else:
+                while rclpy.ok() and not until(node):
+                    executor.spin_once(timeout_sec=0.1)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        except Exception:
+            if rclpy.ok():
+                raise
+        return 0
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            if finished:
+                finished(node)
+            node.destroy_node()
+        rclpy.try_shutdown()
