@@ -102,7 +102,7 @@ class EngineConfig:
     deflection_limit: float = 0.003
     warn_fraction: float = 0.8
     critical_margin: float = 0.05
-    setpoint_delay: float = 0.02
+    setpoint_delay: float = 0.05
     initial: tuple = ()
 
     def __post_init__(self):

@@ -55,7 +55,7 @@ def node_commands(output: Path, speed: float, real_time: bool) -> dict:
         files += ['--params-file', str(share_file(f))]
     sim_over, pub_over = [], []
     if real_time:
-        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=0.02']
+        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=0.05']
         pub_over = ['-p', 'use_sim_time:=false']
     elif speed is not None:
         sim_over = ['-p', f'real_time_factor:={float(speed)}']
@@ -144,11 +144,15 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
         procs.start('rerun_logger', cmds['rerun_logger'])
         procs.wait_for_log('rerun_logger', 'recording to', 30)
         publisher = procs.start('profile_publisher', cmds['profile_publisher'])
-        try:
-            publisher.wait(timeout)
-        except subprocess.TimeoutExpired:
-            raise DemoError(f'the profile did not end within {timeout:g} s:\n'
-                            f'{procs.log("profile_publisher")}') from None
+        deadline = time.monotonic() + timeout
+        while publisher.poll() is None:
+            if 'simulation halted' in procs.log('simulator'):
+                raise DemoError('the simulator halted (its /clock stopped, so the profile '
+                                'cannot go on):\n' + procs.log('simulator'))
+            if time.monotonic() > deadline:
+                raise DemoError(f'the profile did not end within {timeout:g} s:\n'
+                                f'{procs.log("profile_publisher")}')
+            time.sleep(0.1)
         if publisher.returncode != 0:
             raise DemoError(f'profile_publisher failed:\n{procs.log("profile_publisher")}')
         time.sleep(1.0 / factor + 0.3)            # the last second of simulated time

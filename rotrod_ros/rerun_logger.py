@@ -80,6 +80,8 @@ class RerunLogger(Node):
             return
         i = list(msg.name).index('hub')
         t = to_seconds(msg.header.stamp)
+        if self._last_stamp is None:
+            self.get_logger().info(f'receiving: first joint state stamped {t:.3f} s')
         self._last_stamp = t
         self.writer.add_state(t, msg.velocity[i], msg.effort[i])
 

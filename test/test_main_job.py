@@ -126,8 +126,9 @@ def test_sigterm_to_the_logger_leaves_a_verified_file_with_data_to_the_signal(
     ros_node.spin_until(lambda: ros_node.node.count_subscribers(f'{ns}/tip/deflection') >= 1
                         and ros_node.node.count_subscribers(f'{ns}/joint_states') >= 2, 30,
                         'the logger subscribed')
-    ros_node.spin_until(lambda: len(joint) > 200, 30, '2 s of joint states')
-    ros_node.spin_for(0.5)
+    logger.wait_for_output('receiving: first joint state', timeout=30)
+    n = len(joint)
+    ros_node.spin_until(lambda: len(joint) > n + 200, 30, '2 s of joint states')
     last_seen = joint[-1].header.stamp.sec + joint[-1].header.stamp.nanosec * 1e-9
     logger.signal_group(signal.SIGTERM)
     assert logger.wait(timeout=30) == 0
