@@ -218,7 +218,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('-o', '--output', default='out/rotrod.rrd',
                    help='Rerun recording to write (default out/rotrod.rrd)')
     p.add_argument('--speed', type=_finite, default=None,
-                   help='real-time factor of the simulator (default 5, from config/demo.yaml)')
+                   help='real-time factor of the simulator (default 2, from config/demo.yaml)')
     p.add_argument('--real-time', action='store_true',
                    help='run at wall-clock speed (no /clock)')
     p.add_argument('--offline', action='store_true',

@@ -128,7 +128,7 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     say = (lambda *a: None) if quiet else print
     env = ros_environment(os.environ)
     cmds = node_commands(output, speed, real_time)
-    factor = 1.0 if real_time else float(speed or 5.0)
+    factor = 1.0 if real_time else float(speed or 2.0)
     profile = Eq26Profile(period=15.0, omega_max=2.0)
     t_run = 40.0
     timeout = timeout or 60.0 + 3.0 * t_run / factor

@@ -41,6 +41,9 @@ from . import node_main
 from .node_main import ConfigurationError
 
 NODE_NAME = 'rotrod_profile_publisher'
+QOS_DEPTH = 1000
+"""History depth of cmd/omega: a burst of samples (the timer catching up) is kept until
+the subscriber has it (reliable delivery), so the stream stays lossless."""
 
 # name, default, description (unit), (low, high) or None
 PARAMETERS = (
@@ -119,7 +122,7 @@ class ProfilePublisher(Node):
         self._last_k = -1
         self.published = 0
         self._waiting_logged = False
-        self._pub = self.create_publisher(Float64, 'cmd/omega', 10)
+        self._pub = self.create_publisher(Float64, 'cmd/omega', QOS_DEPTH)
         self._timer = self.create_timer(1.0 / self.rate, self._on_timer)
 
     @property

@@ -61,6 +61,9 @@ from .parameters import ALL_SPECS, SPECS_BY_NAME, Spec, build_settings
 NODE_NAME = 'rotrod_simulator'
 MAX_BACKLOG = 1.0
 """Wall seconds of physics the thread catches up on after a stall; beyond, it skips."""
+COMMAND_QOS_DEPTH = 1000
+"""Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
+must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
 LEAD = 0.002
@@ -136,8 +139,8 @@ class SimulatorNode(Node):
         self._pub_diagnostics = self.create_publisher(
             messages.DiagnosticArray, '/diagnostics', 10)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
-        self.create_subscription(Float64, 'cmd/omega', self._on_omega, 10)
-        self.create_subscription(Float64, 'cmd/torque', self._on_torque, 10)
+        self.create_subscription(Float64, 'cmd/omega', self._on_omega, COMMAND_QOS_DEPTH)
+        self.create_subscription(Float64, 'cmd/torque', self._on_torque, COMMAND_QOS_DEPTH)
         self.create_service(Trigger, '~/reset', self._on_reset)
         self.create_service(SetBool, '~/pause', self._on_pause)
         self.add_on_set_parameters_callback(self._on_set_parameters)
