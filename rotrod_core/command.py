@@ -152,13 +152,8 @@ class OmegaSetpointShaper:
         data = np.array(window, dtype=float)
         ks = data[:, 0] - data[0, 0]
         ts = data[:, 1] - data[0, 1]
-        if n < 10:
-            # too few arrivals to fit (a stream often starts with a burst): keep the
-            # interval known so far and a line through the first arrival
-            slope = self.interval
-            line = slope * ks
-        else:
-            slope, line = _fit_line(ks, ts)
+        slope, line = _fit_line(ks, ts)
+        if n >= 10:
             # refit through the punctual half: late bursts do not tilt the grid
             punctual = ts - line <= np.median(ts - line)
             if np.count_nonzero(punctual) >= 2 and np.ptp(ks[punctual]) > 0:
@@ -167,10 +162,8 @@ class OmegaSetpointShaper:
         slope = min(max(slope, self.min_interval), self.max_interval)
         phase = float(np.quantile(ts - line, PHASE_QUANTILE)) if n >= 10 else 0.0
         grid = data[0, 1] + line[-1] + phase
-        # an arrival cannot precede its grid time by much (the grid follows the
-        # punctual arrivals), but may be late by up to the lag minus one interval;
-        # beyond either, the phase is lost: resynchronise on this arrival
-        if not -slope < t - grid < max(self.delay - slope, slope):
+        tolerance = max(self.delay - slope, slope)
+        if not -tolerance < t - grid < tolerance:  # lost the phase: resynchronise
             window.clear()
             window.append((0, t))
             return t
@@ -199,10 +192,7 @@ class OmegaSetpointShaper:
             self._ramps.pop()
             self._starts.pop()
         delta = w_set - w0
-        # behind the grid (after a resynchronisation), take one interval rather than
-        # catch up at the acceleration limit: a late w, not a jolt of w'
-        end = max(deadline, start + (self.interval if delta else 0.0),
-                  start + abs(delta) / self.max_angular_acceleration)
+        end = max(deadline, start + abs(delta) / self.max_angular_acceleration)
         rate = delta / (end - start) if end > start else 0.0
         ramp = Ramp(start, w0, rate, end if rate else start)
         self._ramps.append(ramp)

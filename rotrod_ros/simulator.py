@@ -207,17 +207,22 @@ class SimulatorNode(Node):
 
     # ----------------------------------------------------------------- commands
     def _command_time(self) -> float | None:
-        """Simulated time at which a command arriving now takes effect.
+        """Simulated time at which a command arriving now takes effect (None: at once).
 
-        The latest publication's simulated time plus the wall time since it, at the
-        real-time factor: what a sender saw (the stamps and /clock it received) plus
-        the time it took. It follows the simulation's actual progress, also when the
-        machine cannot keep up with the factor. Never before the engine's time.
+        In real time (factor 1) the simulated time due now. With /clock, senders run
+        on simulated time and see only what was published, so the latest
+        publication's simulated time plus the wall time since it, at the factor: it
+        follows the simulation's actual progress also when the machine cannot keep
+        up. Never before the engine's time.
         """
         if self._paused or self.engine.halted or not self._pacer.paced:
             return None
-        sim, wall = self._published
-        at = sim + (time.monotonic() - wall) * self._pacer.factor
+        now = time.monotonic()
+        if self.settings.publishes_clock:
+            sim, wall = self._published
+            at = sim + (now - wall) * self._pacer.factor
+        else:
+            at = self._pacer.sim_time(now)
         return min(max(at, self.engine.time), self.engine.time + self.settings.publish_period)
 
     def _on_omega(self, msg: Float64) -> None:
