@@ -19,27 +19,16 @@ stream) becomes a ramp over D, or longer at the acceleration limit.
 
 from __future__ import annotations
 
-import math
 from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
+from .checks import finite_number
+
 PHASE_QUANTILE = 0.1
 """Quantile of the arrivals' offsets from the fitted line that sets the grid's phase."""
-
-
-def _finite(name: str, value, *, positive: bool = False) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f'{name} must be a number, got {value!r}') from None
-    if isinstance(value, bool) or not math.isfinite(x):
-        raise ValueError(f'{name} must be a finite number, got {value!r}')
-    if positive and not x > 0:
-        raise ValueError(f'{name} must be > 0, got {value!r}')
-    return x
 
 
 @dataclass(frozen=True)
@@ -85,22 +74,22 @@ class OmegaSetpointShaper:
     def __init__(self, max_angular_acceleration: float, *, nominal_interval: float = 0.01,
                  min_interval: float = 1e-4, max_interval: float = 0.25,
                  window: int = 1000, delay: float = 0.02, omega: float = 0.0, time: float = 0.0):
-        self.max_angular_acceleration = _finite(
+        self.max_angular_acceleration = finite_number(
             'max_angular_acceleration', max_angular_acceleration, positive=True)
-        self.nominal_interval = _finite('nominal_interval', nominal_interval, positive=True)
-        self.min_interval = _finite('min_interval', min_interval, positive=True)
-        self.max_interval = _finite('max_interval', max_interval, positive=True)
+        self.nominal_interval = finite_number('nominal_interval', nominal_interval, positive=True)
+        self.min_interval = finite_number('min_interval', min_interval, positive=True)
+        self.max_interval = finite_number('max_interval', max_interval, positive=True)
         if not self.min_interval <= self.nominal_interval <= self.max_interval:
             raise ValueError('need min_interval <= nominal_interval <= max_interval')
         if isinstance(window, bool) or not isinstance(window, int) or window < 2:
             raise ValueError(f'window must be an integer >= 2, got {window!r}')
         self.window = window
-        self.delay = _finite('delay', delay, positive=True)
+        self.delay = finite_number('delay', delay, positive=True)
         self.reset(omega, time)
 
     def reset(self, omega: float = 0.0, time: float = 0.0) -> None:
         """Hold ``omega`` (rad/s) from ``time`` (s) on; forget the stream."""
-        w, t = _finite('omega', omega), _finite('time', time)
+        w, t = finite_number('omega', omega), finite_number('time', time)
         self._ramps = [Ramp(t, w, 0.0, t)]
         self._starts = [t]
         self._last_arrival = None
@@ -178,7 +167,7 @@ class OmegaSetpointShaper:
         at the arrival's grid time plus one interval, or later if the acceleration
         limit requires.
         """
-        w_set, t = _finite('setpoint', setpoint), _finite('time', time)
+        w_set, t = finite_number('setpoint', setpoint), finite_number('time', time)
         if self._last_arrival is not None and t < self._last_arrival:
             raise ValueError(f'setpoint time {t} s precedes the previous one '
                              f'({self._last_arrival} s)')

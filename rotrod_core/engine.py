@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 from . import model
 from .analysis import dynamic_frequencies, modal_analysis, tangential_bending
+from .checks import finite_number
 from .command import OmegaSetpointShaper
 from .critical import critical_speed
 from .model import STATE_FIELDS, State, make_state
@@ -36,22 +37,6 @@ per radian of that mode ~ (dt |lambda|)^4 / 120, here below 0.06 %)."""
 
 class CommandRejected(ValueError):
     """A command was refused (reason in the message); the simulation is unchanged."""
-
-
-def _number(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
-    if isinstance(value, bool):
-        raise ValueError(f'{name} must be a number, got {value!r}')
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f'{name} must be a number, got {value!r}') from None
-    if not math.isfinite(x):
-        raise ValueError(f'{name} must be finite, got {value!r}')
-    if positive and not x > 0:
-        raise ValueError(f'{name} must be > 0, got {value!r}')
-    if nonnegative and not x >= 0:
-        raise ValueError(f'{name} must be >= 0, got {value!r}')
-    return x
 
 
 def fastest_rate(params: RodParams, max_omega: float) -> float:
@@ -116,12 +101,12 @@ class EngineConfig:
         check_coupling(self.params, self.coupling)
         for name in ('physics_rate', 'max_angular_acceleration', 'max_omega', 'max_torque',
                      'deflection_limit', 'warn_fraction'):
-            set_(self, name, _number(name, getattr(self, name), positive=True))
+            set_(self, name, finite_number(name, getattr(self, name), positive=True))
         set_(self, 'critical_margin',
-             _number('critical_margin', self.critical_margin, nonnegative=True))
+             finite_number('critical_margin', self.critical_margin, nonnegative=True))
         if self.warn_fraction > 1:
             raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
-        if not 0 < _number('setpoint_delay', self.setpoint_delay) <= 10:
+        if not 0 < finite_number('setpoint_delay', self.setpoint_delay) <= 10:
             raise ValueError(f'setpoint_delay must be in (0, 10] s, got '
                              f'{self.setpoint_delay!r}')
         if self.critical_margin >= 1:
@@ -297,7 +282,7 @@ class SimulationEngine:
 
     # ----------------------------------------------------------------- commands
     def _command_time(self, at) -> float:
-        t = self.time if at is None else _number('command time', at)
+        t = self.time if at is None else finite_number('command time', at)
         return max(t, self.time, self._shaper.last_command_time)
 
     def _reject(self, reason: str):
@@ -306,7 +291,7 @@ class SimulationEngine:
 
     def _check_command(self, name: str, value, drive: str, limit: float, unit: str) -> float:
         try:
-            x = _number(name, value)
+            x = finite_number(name, value)
         except ValueError as exc:
             self._reject(str(exc))
         if abs(x) > limit:

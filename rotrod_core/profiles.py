@@ -17,19 +17,11 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.special import fresnel
 
+from .checks import finite_number
+
 
 def _finite(owner: str, name: str, value, *, positive=False, nonnegative=False) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f'{owner}.{name} must be a number, got {value!r}') from None
-    if isinstance(value, bool) or not math.isfinite(x):
-        raise ValueError(f'{owner}.{name} must be a finite number, got {value!r}')
-    if positive and not x > 0:
-        raise ValueError(f'{owner}.{name} must be > 0, got {value!r}')
-    if nonnegative and not x >= 0:
-        raise ValueError(f'{owner}.{name} must be >= 0, got {value!r}')
-    return x
+    return finite_number(f'{owner}.{name}', value, positive=positive, nonnegative=nonnegative)
 
 
 def _rescaled(value: float, omega_peak: float) -> float:

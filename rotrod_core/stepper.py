@@ -6,6 +6,7 @@ import math
 from functools import partial
 
 from . import model
+from .checks import finite_number
 from .model import COUPLINGS, Coefficients, State, make_state
 from .params import RodParams
 from .rk4 import rk4_step
@@ -13,16 +14,6 @@ from .rk4 import rk4_step
 
 class NonFiniteStateError(FloatingPointError):
     """A step produced a non-finite state; the stepper kept its last good state."""
-
-
-def _finite_number(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f'{name} must be a number, got {value!r}') from None
-    if not math.isfinite(x):
-        raise ValueError(f'{name} must be finite, got {value!r}')
-    return x
 
 
 def check_coupling(params: RodParams, coupling: str) -> None:
@@ -56,7 +47,7 @@ class RealTimeStepper:
                  initial: dict | None = None):
         if params.is_batch:
             raise ValueError('RealTimeStepper simulates one system; got a batch of RodParams')
-        self.dt = _finite_number('dt', dt)
+        self.dt = finite_number('dt', dt)
         if not self.dt > 0:
             raise ValueError(f'dt must be > 0, got {dt!r}')
         check_coupling(params, coupling)
@@ -97,7 +88,7 @@ class RealTimeStepper:
 
         Afterwards :attr:`torque` is the hub torque the drive must supply (N m).
         """
-        wd = _finite_number('omega_dot', omega_dot)
+        wd = finite_number('omega_dot', omega_dot)
         new = rk4_step(self._velocity_rates, self._state, self.dt, wd, wd, wd)
         state = self._accept(new)
         self.omega_dot = wd
@@ -106,8 +97,8 @@ class RealTimeStepper:
 
     def step_torque(self, torque: float, torque_end: float | None = None) -> State:
         """Advance one step under the hub torque (N m), linear to ``torque_end`` if given."""
-        q0 = _finite_number('torque', torque)
-        q1 = q0 if torque_end is None else _finite_number('torque_end', torque_end)
+        q0 = finite_number('torque', torque)
+        q1 = q0 if torque_end is None else finite_number('torque_end', torque_end)
         new = rk4_step(self._torque_rates, self._state, self.dt, q0, 0.5 * (q0 + q1), q1)
         state = self._accept(new)
         self.torque = q1
@@ -116,7 +107,7 @@ class RealTimeStepper:
 
     def jump_omega(self, omega: float) -> State:
         """Change the hub's angular velocity instantly to ``omega`` (rad/s), physically."""
-        w = _finite_number('omega', omega)
+        w = finite_number('omega', omega)
         self._state = model.omega_jump(self._co, self._state, w)
         return self._state
 
