@@ -121,3 +121,12 @@ def test_sine_sweep_is_a_linear_chirp():
     assert p.omega(40.0) == p.omega(30.0) and p.omega_dot(40.0) == 0.0
     assert p.peak == 0.2 and p.end_time == 30.0
     assert make_profile('sine_sweep', amplitude=0.1).amplitude == 0.1
+
+
+def test_eq26_peak_angular_acceleration_is_2w_over_t():
+    # README and config/table1.yaml quote it (0.27 rad/s^2) against the default
+    # max_angular_acceleration of the simulator (0.5 rad/s^2)
+    t = np.linspace(0, 40, 400001)
+    peak = np.max(np.abs(Eq26Profile().omega_dot(t)))
+    assert peak == pytest.approx(2 * 2.0 / 15.0, rel=1e-9)
+    assert round(peak, 2) == 0.27
