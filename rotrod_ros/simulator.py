@@ -225,6 +225,8 @@ class SimulatorNode(Node):
             at = self._pacer.sim_time(now)
         return min(max(at, self.engine.time), self.engine.time + self.settings.publish_period)
 
+    # Two callbacks, not one shared helper: rclpy throttles a log call per call site,
+    # and a rejection on one topic must not silence the other's.
     def _on_omega(self, msg: Float64) -> None:
         with self._lock:
             try:
