@@ -213,7 +213,9 @@ class SimulatorNode(Node):
         on simulated time and see only what was published, so the latest
         publication's simulated time plus the wall time since it, at the factor: it
         follows the simulation's actual progress also when the machine cannot keep
-        up. Never before the engine's time.
+        up. Never before the engine's time; not capped above either, since when the
+        physics thread lags, a cap would date a run of arrivals early, and the
+        setpoint shaper relies on delivery delays being one-sided (late, not early).
         """
         if self._paused or self.engine.halted or not self._pacer.paced:
             return None
@@ -223,7 +225,7 @@ class SimulatorNode(Node):
             at = sim + (now - wall) * self._pacer.factor
         else:
             at = self._pacer.sim_time(now)
-        return min(max(at, self.engine.time), self.engine.time + self.settings.publish_period)
+        return max(at, self.engine.time)
 
     # Two callbacks, not one shared helper: rclpy throttles a log call per call site,
     # and a rejection on one topic must not silence the other's.

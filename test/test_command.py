@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rotrod_core.command import OmegaSetpointShaper
+from rotrod_core.command import LowerEnvelope, OmegaSetpointShaper
 
 T = 0.01
 
@@ -141,3 +141,90 @@ def test_a_stall_shorter_than_the_delay_does_not_reach_w():
     w, wd = sample(sh, t)
     assert np.max(np.abs(wd - a)) < 1e-3 * a
     assert np.max(np.abs(w - a * (t - 0.2))) < 1e-6
+
+
+def brute_force_lower_hull(t):
+    """Indices i such that (i, t_i) is a vertex of the lower convex hull (O(n^3))."""
+    n = len(t)
+    out = []
+    for b in range(n):
+        hidden = any(a < b < c and (b - a) * (t[c] - t[a]) - (t[b] - t[a]) * (c - a) <= 0
+                     for a in range(b) for c in range(b + 1, n))
+        if not hidden:
+            out.append(b)
+    return out
+
+
+@pytest.mark.parametrize('seed', range(5))
+def test_the_sliding_lower_envelope_is_the_convex_hull_of_its_window(seed):
+    rng = np.random.default_rng(seed)
+    size = 25
+    env = LowerEnvelope(size)
+    times = []
+    for k in range(120):
+        # (a small uniform part keeps triples of points away from collinear)
+        times.append(k * T + rng.uniform(0, 1e-4) + rng.exponential(0.002) * (rng.random() < 0.5))
+        env.add(times[-1])
+        window = np.array(times[-size:])
+        assert env.vertices() == brute_force_lower_hull(window)
+        assert env.count == len(window)
+        if len(window) >= 2:
+            slope, last = env.line()
+            # a supporting line: below every point, touching the hull
+            line = last + slope * (np.arange(len(window)) - (len(window) - 1))
+            assert np.all(window - line >= -1e-12)
+            assert np.min(window - line) <= 1e-12
+
+
+def test_late_arrivals_of_half_the_stream_do_not_move_the_grid():
+    a = 0.3
+    rng = np.random.default_rng(11)
+    sh = OmegaSetpointShaper(10.0, delay=0.1)
+    last = 0.0
+    for k in range(1500):
+        late = rng.exponential(0.02) if rng.random() < 0.5 else 0.0   # one-sided delays
+        last = max(last, k * T + late)
+        sh.command(a * k * T, last)
+    t = np.linspace(3.0, 14.9, 2001)
+    w, wd = sample(sh, t)
+    assert sh.interval == pytest.approx(T, rel=1e-6)
+    assert np.max(np.abs(w - a * (t - 0.1))) < 1e-9
+
+
+def test_a_stall_longer_than_the_delay_coasts_at_the_stream_slope_and_rejoins():
+    """A smooth profile through a 150 ms stall, 3x the delay: w goes on along the
+    stream's extrapolation (w' linear in t), stays within w''' s^3 of the delayed
+    profile, and rejoins it exactly."""
+    profile = lambda t: 1.0 - np.cos(t)  # noqa: E731  |w'''| <= 1 rad/s^4
+    D = 0.05
+    sh = OmegaSetpointShaper(10.0, delay=D)
+    last = 0.0
+    for k in range(600):
+        arrival = k * T if not 300 <= k < 315 else 315 * T + (k - 300) * 1e-5
+        last = max(last, arrival)
+        sh.command(profile(k * T), last)
+    assert sh.late_setpoints > 0
+    t = np.linspace(2.0, 5.9, 3901)
+    w, wd = sample(sh, t)
+    assert np.max(np.abs(w - profile(t - D))) < 1.0 * 0.15 ** 3
+    coasting = (t > 299 * T + D) & (t < 315 * T)     # no setpoint due here has come yet
+    assert np.max(np.abs(wd[coasting] - np.sin(t[coasting] - D))) < 1.0 * 0.15 ** 2
+    back = t > 315 * T + D + 2 * T                  # rejoined the delayed interpolation
+    knots = np.arange(600) * T
+    expected = np.interp(t[back] - D, knots, profile(knots))
+    assert np.max(np.abs(w[back] - expected)) < 1e-9
+
+
+def test_a_stream_that_stops_mid_ramp_ends_at_its_last_setpoint():
+    a = 0.3
+    sh = OmegaSetpointShaper(10.0, delay=0.05)
+    stream(sh, lambda t: a * t, 300)                 # last setpoint a * 2.99 rad/s
+    last = a * 299 * T
+    t = np.linspace(3.0, 5.0, 2001)
+    w, wd = sample(sh, t)
+    # it went on at the stream's slope (the next setpoint might have been late) ...
+    assert w.max() == pytest.approx(last + a * sh.max_stall, rel=1e-9)
+    assert np.max(np.abs(wd)) <= 10.0 + 1e-12
+    # ... and came back to the last setpoint, where it holds
+    settled = t > 299 * T + 0.05 + sh.max_stall + 0.05 + 1e-9
+    assert np.all(w[settled] == pytest.approx(last, abs=1e-12))

@@ -140,7 +140,6 @@ def test_sigterm_to_the_logger_leaves_a_verified_file_with_data_to_the_signal(
     assert in_last_second >= 95
 
 
-@pytest.mark.flaky(reruns=2)  # the stream crosses processes: see the issue note
 def test_the_main_job_end_to_end(tmp_path):
     """``rotrod demo``: Eq. 26 through the three nodes; the recording is read back."""
     out = tmp_path / 'demo' / 'rotrod.rrd'

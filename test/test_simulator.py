@@ -107,7 +107,6 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
     assert freq[-1].layout.dim[0].label and freq[-1].layout.dim[0].size == 2
 
 
-@pytest.mark.flaky(reruns=2)  # the stream crosses processes: see the issue note
 def test_eq26_streamed_at_100_hz_matches_the_offline_run(ros_processes, ros_node, request):
     ns = namespace(request)
     start_simulator(ros_processes, ns, real_time_factor=1.0)
@@ -137,6 +136,8 @@ def test_eq26_streamed_at_100_hz_matches_the_offline_run(ros_processes, ros_node
     du = u[inside] - np.interp(tt, offline.t, offline.u)
     dv = v[inside] - np.interp(tt, offline.t, offline.v)
     assert tt[-1] - tt[0] > 39.0
+    print(f'streamed Eq. 26: max |du| {np.max(np.abs(du)) / np.max(offline.u):.3%} of max u, '
+          f'max |dv| {np.max(np.abs(dv)) / np.max(np.abs(offline.v)):.3%} of max |v|')
     assert np.max(np.abs(du)) <= 0.01 * np.max(offline.u)
     assert np.max(np.abs(dv)) <= 0.05 * np.max(np.abs(offline.v))
 
