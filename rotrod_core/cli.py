@@ -5,6 +5,8 @@ rotrod simulate --drive torque --torque 0.01 --t-end 10 -o spin.npz
 rotrod frequencies --omega 0 1 2
 rotrod critical-speed --limit 0.003 --eccentricity 0.05 0.1 0.2
 rotrod demo
+rotrod reproduce --out out/reproduce
+rotrod analyze --out out/analyze --only campbell coupling
 """
 
 from __future__ import annotations
@@ -176,6 +178,42 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def _command_line(args, name: str, extra: list) -> str:
+    return ' '.join(['rotrod', name, '--out', str(args.out)] + extra)
+
+
+def cmd_reproduce(args) -> int:
+    """The paper's Figs. 3-10, the fact report and the Eq. 26 recording, into --out."""
+    from .reproduce import reproduce
+    extra = ['--no-recording'] if args.no_recording else []
+    try:
+        result = reproduce(args.out, recording=not args.no_recording,
+                           command=_command_line(args, 'reproduce', extra))
+    except ImportError as exc:
+        print(f'rotrod reproduce: error: {exc}', file=sys.stderr)
+        return 2
+    print(f'report: {result.report}')
+    print(f'figures: {", ".join(str(p) for p in result.figures)}')
+    if result.recording is not None:
+        print(f'recording: {result.recording} (open it with: rerun {result.recording})')
+    return 0
+
+
+def cmd_analyze(args) -> int:
+    """Campbell diagrams, critical-speed maps and the coupling drift, into --out."""
+    from .analyze import PARTS, analyze
+    parts = tuple(args.only) if args.only else PARTS
+    extra = ['--only', *parts] if args.only else []
+    try:
+        result = analyze(args.out, parts, command=_command_line(args, 'analyze', extra))
+    except ImportError as exc:
+        print(f'rotrod analyze: error: {exc}', file=sys.stderr)
+        return 2
+    for path in result.files:
+        print(f'wrote {path}')
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``rotrod`` command."""
     parser = argparse.ArgumentParser(prog='rotrod', description=__doc__.split('\n')[0],
@@ -225,6 +263,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help='no ROS: run the scenario in rotrod_core only (CSV in --out)')
     p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser('reproduce', help="the paper's Figs. 3-10 (PNG), a report of its facts "
+                                         'beside measured values, the Eq. 26 Rerun recording')
+    p.add_argument('--out', type=Path, default=Path('out/reproduce'),
+                   help='output directory (default out/reproduce)')
+    p.add_argument('--no-recording', action='store_true',
+                   help='skip the Rerun recording (no rerun-sdk needed)')
+    p.set_defaults(func=cmd_reproduce)
+
+    p = sub.add_parser('analyze', help='beyond the paper: Campbell diagrams, critical-speed '
+                                       'maps, exact vs Eq. 23 torque coupling')
+    p.add_argument('--out', type=Path, default=Path('out/analyze'),
+                   help='output directory (default out/analyze)')
+    p.add_argument('--only', nargs='+', choices=('campbell', 'critical-map', 'coupling'),
+                   help='run only these analyses (default: all)')
+    p.set_defaults(func=cmd_analyze)
     return parser
 
 

@@ -54,6 +54,25 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
     return float(w) if w.ndim == 0 else w
 
 
+def step_response(params: RodParams, omega: float, t):
+    """Eq. 29: deflection z = u + i v (m) from rest in the rotating frame at constant w.
+
+    z(t) = (w^2 r0 / (2 w0)) [(1 - exp(i w1 t)) / w1 + (1 - exp(-i w2 t)) / w2] with
+    w1 = w0 - w, w2 = w0 + w, for an isotropic undamped rod and 0 < w < w0 (rad/s);
+    t in s (array). Its peak magnitude approaches 2 u_s.
+    """
+    if not params.is_isotropic or np.any(np.asarray(params.damping_ratio) > 0):
+        raise ValueError('step_response (Eq. 29) needs an isotropic rod without damping')
+    w0 = params.natural_frequency
+    w = float(omega)
+    if not 0 < w < w0:
+        raise ValueError(f'step_response needs 0 < omega < w0 = {w0:.6f} rad/s, got {omega!r}')
+    w1, w2 = w0 - w, w0 + w
+    t = np.asarray(t, dtype=float)
+    return (w * w * params.eccentricity / (2 * w0)) * ((1 - np.exp(1j * w1 * t)) / w1
+                                                       + (1 - np.exp(-1j * w2 * t)) / w2)
+
+
 def peak_deflection(params: RodParams, profile: Profile, t_end: float, dt: float) -> float:
     """Largest |r| = sqrt(u^2 + v^2) (m) over an offline run from rest."""
     run = simulate(params, profile, t_end, dt=dt)
@@ -63,7 +82,7 @@ def peak_deflection(params: RodParams, profile: Profile, t_end: float, dt: float
 def critical_speed_for_profile(params: RodParams, profile: Profile, deflection_limit,
                                t_end: float | None = None, dt: float = 2e-3,
                                omega_search_max: float | None = None, grid: int = 40,
-                               tolerance: float = 1e-4):
+                               tolerance: float = 1e-4, progress=None):
     """Numerical critical speed (rad/s) of a profile shape.
 
     The largest peak angular velocity W such that every run of
@@ -85,6 +104,7 @@ def critical_speed_for_profile(params: RodParams, profile: Profile, deflection_l
         omega_search_max: top of the W sweep, rad/s.
         grid: number of sweep points.
         tolerance: bisection tolerance relative to w0.
+        progress: optional callable, called with the number of runs done after each run.
     """
     d = _limit(deflection_limit)
     if not isinstance(profile, Profile):
@@ -107,6 +127,8 @@ def critical_speed_for_profile(params: RodParams, profile: Profile, deflection_l
     def per_metre(w):
         if w not in cache:
             cache[w] = peak_deflection(unit, profile.with_peak(w), t_end, dt)
+            if progress is not None:
+                progress(len(cache))
         return cache[w]
 
     ws = np.linspace(w_max / grid, w_max, grid)

@@ -23,12 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rotrod_core import RodParams, simulate
+from rotrod_core import RodParams, recording, simulate
 from rotrod_core.alignment import profile_delay
 from rotrod_core.profiles import Eq26Profile
 from rotrod_core.stages import format_stage_table, series_stage_extremes
 
-from . import recording
 from .install import executable, share_file
 
 EXECUTABLES = ('simulator', 'rerun_logger', 'profile_publisher')

@@ -23,10 +23,11 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
+from rotrod_core.recording import RecordingWriter
+
 from . import node_main
 from .messages import to_seconds
 from .node_main import ConfigurationError
-from .recording import RecordingWriter
 
 NODE_NAME = 'rotrod_rerun_logger'
 QOS_DEPTH = 1000

@@ -15,9 +15,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
-from rotrod_core import Eq26Profile, RodParams, simulate
+from rotrod_core import Eq26Profile, RodParams, recording, simulate
 from rotrod_core.alignment import profile_delay
-from rotrod_ros import recording
 from rotrod_ros.install import executable
 
 pytestmark = pytest.mark.ros

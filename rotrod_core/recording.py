@@ -1,5 +1,9 @@
 """Rerun recordings of a rotrod run: writing in batches, and reading back (no ROS import).
 
+Used by the ROS Rerun logger (live runs) and by ``rotrod reproduce`` (offline runs).
+rerun-sdk is imported when a recording is written or read, not with this module, so
+the numerical core does not need it.
+
 Entities (SI units; time on the timeline ``time``, from the message stamps):
 
     timeseries/deflection/u, .../v        tip deflection in the rotating frame, m
@@ -20,8 +24,6 @@ import uuid
 from pathlib import Path
 
 import numpy as np
-import rerun as rr
-import rerun.blueprint as rrb
 
 TIMELINE = 'time'
 U, V = 'timeseries/deflection/u', 'timeseries/deflection/v'
@@ -37,8 +39,13 @@ SERIES_STYLE = {
 }
 
 
-def blueprint() -> rrb.Blueprint:
-    """The default layout: time series on the left, the two trajectories on the right."""
+def blueprint():
+    """The default layout, a ``rerun.blueprint.Blueprint``.
+
+    Time series on the left, the two trajectories on the right.
+    """
+    import rerun as rr
+    import rerun.blueprint as rrb
     history = rr.VisibleTimeRange(TIMELINE, start=rr.TimeRangeBoundary.infinite(),
                                   end=rr.TimeRangeBoundary.cursor_relative())
     return rrb.Blueprint(
@@ -72,6 +79,8 @@ class RecordingWriter:
 
     def __init__(self, path: str | Path, *, application_id: str = 'rotrod',
                  serve_port: int | None = None):
+        import rerun as rr
+        self._rr = rr
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
@@ -123,6 +132,7 @@ class RecordingWriter:
 
     def flush(self) -> None:
         """Send everything buffered to the sinks (one column batch per entity)."""
+        rr = self._rr
         for entity, rows in self._buffers.items():
             if not rows:
                 continue
@@ -149,6 +159,37 @@ class RecordingWriter:
         self.flush()
         self.rec.flush(timeout_sec=timeout)
         self.rec.disconnect()
+
+
+def write_run(path: str | Path, run, *, sample_interval: float = 0.01,
+              application_id: str = 'rotrod') -> int:
+    """Write an offline run (a :class:`~rotrod_core.result.SimulationResult`) to a .rrd file.
+
+    The same entities as a live recording: u, v, omega, hub torque, the model's
+    dynamic frequencies f1, f2 (Hz) at each sample's omega, and the tip in the rotating
+    and inertial frames. Samples are taken every ``sample_interval`` seconds of the run
+    (at least every sample). Returns the number of samples written.
+    """
+    from .analysis import dynamic_frequencies
+
+    dt = float(run.t[1] - run.t[0]) if len(run.t) > 1 else sample_interval
+    every = max(1, int(round(sample_interval / dt)))
+    keep = np.arange(0, len(run.t), every)
+    if keep[-1] != len(run.t) - 1:
+        keep = np.append(keep, len(run.t) - 1)
+    f1, f2 = dynamic_frequencies(run.params, run.omega[keep])
+    height = float(run.params.rod_length)
+    writer = RecordingWriter(path, application_id=application_id)
+    try:
+        for j, i in enumerate(keep):
+            t = float(run.t[i])
+            writer.add_state(t, float(run.omega[i]), float(run.torque[i]))
+            writer.add_deflection(t, float(run.u[i]), float(run.v[i]))
+            writer.add_position(t, float(run.x[i]), float(run.y[i]), height)
+            writer.add_frequencies(t, float(f1[j]), float(f2[j]))
+    finally:
+        writer.close()
+    return len(keep)
 
 
 def entity_paths(path: str | Path) -> list:
