@@ -305,8 +305,9 @@ def stage_facts(run: SimulationResult, params: RodParams = TABLE1) -> list:
               'tangential deflection',
         paper_value='~10^3', closed_form='-',
         measured=f'max u / max |v| = {hold.u_max / v_amp:.0f} (10^{orders:.2f})',
-        verdict=AGREES if _same_order(hold.u_max / v_amp, 1e3) else DIFFERS,
-        criterion='same order of magnitude as 10^3 (within a factor sqrt(10))',
+        verdict=AGREES if hold.u_max / v_amp >= 1e3 else DIFFERS,
+        criterion='three or more orders of magnitude (ratio >= 10^3), as MODEL.md reads '
+                  'the claim',
         values={'ratio': hold.u_max / v_amp}))
 
     ok = abs(fit.centre.real - u_s) < 1e-3 * u_s
