@@ -325,7 +325,8 @@ class _Fit:
     amplitudes: np.ndarray  # complex block-mean amplitudes at the window centre, m
     drift: np.ndarray       # Legendre coefficients of the drift, m
     residual: np.ndarray    # weighted residual, m
-    jacobian: np.ndarray    # weighted; columns: poles, amplitudes, drift
+    noise_var: float        # per-sample complex noise variance from the residual, m^2
+    unit: np.ndarray        # variances of poles, amplitudes, drift in units of noise_var
 
 
 def _solve(a, b):
@@ -337,13 +338,14 @@ def _solve(a, b):
     return x
 
 
-def _fit(data, s, degree, window, tolerance=1e-8):
+def _fit(data, s, degree, window, tolerance=1e-8, covariance=True):
     """Least squares over poles ``s`` (1/s), amplitudes and drift, from start poles ``s``.
 
     Variable projection: the amplitudes and drift are solved exactly for each trial of
     the poles; the poles move along the Gauss-Newton direction of the joint problem
     (Kaufman's approximation), shortened until the residual decreases. Stops when an
     update moves every pole's phase over the window by less than ``tolerance`` rad.
+    ``covariance``: also the parameters' variances (else left NaN).
     """
     s = np.asarray(s, dtype=complex)
     k = len(s)
@@ -375,8 +377,15 @@ def _fit(data, s, degree, window, tolerance=1e-8):
         s, (basis, de, lin, r, cost) = trial, new
         if moved < tolerance:
             break
+    jac = np.concatenate((de * lin[:k], basis), axis=1)
+    unit = np.full(jac.shape[1], np.nan)
+    if covariance:
+        try:
+            unit = np.abs(np.diag(np.linalg.inv(jac.conj().T @ jac)).real)
+        except np.linalg.LinAlgError:
+            unit[:] = np.inf
     return _Fit(s=s, amplitudes=lin[:k], drift=lin[k:], residual=r,
-                jacobian=np.hstack([de * lin[:k], basis]))
+                noise_var=cost / max(data.m - jac.shape[1], 1), unit=unit)
 
 
 @functools.lru_cache(maxsize=16)
@@ -418,7 +427,8 @@ def _start_values(grid, interval, cfg, window):
     f_first = _peak(np.abs(np.fft.fft(y_perp, nfft)) ** 2 / norm, freqs, in_band)
     if math.isnan(f_first):
         return []
-    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window, tolerance=1e-3)
+    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window, tolerance=1e-3,
+                 covariance=False)
     rest = first.residual
     f_first = first.s[0].imag / TWO_PI
     other = in_band & (freqs * f_first < 0)
@@ -440,38 +450,29 @@ def _block_gain(data, s):
     return np.mean(np.exp(np.outer(s, j)), axis=1)
 
 
-def _variances(fit, data):
-    """Per-sample noise variance (m^2) and the parameters' variances in units of it."""
-    r = fit.residual
-    noise_var = float(np.vdot(r, r).real) / max(data.m - fit.jacobian.shape[1], 1)
-    try:
-        unit = np.abs(np.diag(np.linalg.inv(fit.jacobian.conj().T @ fit.jacobian)).real)
-    except np.linalg.LinAlgError:
-        unit = np.full(fit.jacobian.shape[1], np.inf)
-    return noise_var, unit
-
-
-def _drift_degree(fit, data):
+def _drift_degree(fit):
     """Highest drift degree whose coefficient stands out of the noise: |c| > 5 std(c).
 
     Strict on purpose: a drift term kept for noise costs the whirls up to tens of times
     their variance (it absorbs a slow whirl), one dropped while marginal biases them by
     less than the noise does.
     """
-    noise_var, unit = _variances(fit, data)
     degree = len(fit.drift) - 1
     first = 2 * len(fit.s)
     while degree > 0 and (abs(fit.drift[degree]) ** 2
-                          <= _DRIFT_SIGNIFICANCE * noise_var * unit[first + degree]):
+                          <= _DRIFT_SIGNIFICANCE * fit.noise_var * fit.unit[first + degree]):
         degree -= 1
     return degree
 
 
 def _whirls(fit, data, cfg, window):
-    """(name, whirl, problem) per fitted pole (problem '' if accepted), noise variance."""
+    """(name, whirl, kind, problem) per fitted pole; kind and problem '' if accepted.
+
+    kind: 'noise' (not detected), 'band', 'decay' or 'std' (see the module docstring).
+    """
     k = len(fit.s)
-    noise_var, unit = _variances(fit, data)
-    c_pole = unit[:k]
+    noise_var = fit.noise_var
+    c_pole = fit.unit[:k]
     amplitudes = np.abs(fit.amplitudes / _block_gain(data, fit.s))
     threshold_db = cfg.detection_db
     out = []
@@ -483,29 +484,24 @@ def _whirls(fit, data, cfg, window):
         snr_db = 10 * math.log10(snr) if snr > 0 else -math.inf
         total_db = snr_db + 10 * math.log10(data.samples)
         std = math.sqrt(0.5 * noise_var * c_pole[i]) / TWO_PI
-        problem = ''
+        kind, problem = '', ''
         if amp <= _ROUNDOFF * data.z_scale:
-            problem = 'no oscillation (amplitude at float round-off of the offset)'
+            kind, problem = 'noise', 'no oscillation (amplitude at float round-off of the offset)'
         elif total_db < threshold_db:
-            problem = (f'no oscillation above the noise ({total_db:.1f} dB < '
-                       f'{threshold_db:g} dB over the window)')
+            kind, problem = 'noise', (f'no oscillation above the noise ({total_db:.1f} dB < '
+                                      f'{threshold_db:g} dB over the window)')
         elif not cfg.min_cycles / window <= f <= cfg.max_frequency:
-            problem = f'frequency {f:.4g} Hz outside the band'
+            kind, problem = 'band', f'frequency {f:.4g} Hz outside the band'
         elif abs(decay) * window > cfg.max_decay:
-            problem = (f'decays or grows by {abs(decay) * window:.2g} Np over the window '
-                       f'(> {cfg.max_decay:g})')
+            kind, problem = 'decay', (f'decays or grows by {abs(decay) * window:.2g} Np over '
+                                      f'the window (> {cfg.max_decay:g})')
         elif not std <= cfg.max_relative_std * f:
-            problem = (f'frequency too uncertain: std {std:.2g} Hz > '
-                       f'{cfg.max_relative_std:g} x {f:.4g} Hz')
-        whirl = Whirl(frequency=math.nan if problem else f, amplitude=amp, decay_rate=decay,
-                      snr_db=snr_db,
-                      frequency_std=std)
-        out.append(('forward' if fit.s[i].imag > 0 else 'backward', whirl, problem))
-    return out, noise_var
-
-
-def _is_noise(problem):
-    return problem.startswith('no oscillation')
+            kind, problem = 'std', (f'frequency too uncertain: std {std:.2g} Hz > '
+                                    f'{cfg.max_relative_std:g} x {f:.4g} Hz')
+        whirl = Whirl(frequency=math.nan if kind else f, amplitude=amp, decay_rate=decay,
+                      snr_db=snr_db, frequency_std=std)
+        out.append(('forward' if fit.s[i].imag > 0 else 'backward', whirl, kind, problem))
+    return out
 
 
 def _poles(estimate):
@@ -537,44 +533,57 @@ def _estimate(t, z, cfg: WhirlSettings, start=None) -> WhirlEstimate:
         return _no_estimate(f'window too short: {data.m} blocks, {cfg.min_blocks} needed',
                             **common)
     if start:
-        warm = _fitted_estimate(data, cfg, window, start, common)
-        if not warm.reason:
+        warm, lost = _fitted_estimate(data, cfg, window, start, common)
+        if not lost:
             return warm
     grid = _Grid(data.grid, data.grid_tau, cfg.drift_degree)
     poles = _start_values(grid, data.interval, cfg, window)
     if not poles:
         return _no_estimate('no frequency in the band', **common)
-    return _fitted_estimate(data, cfg, window, poles, common)
+    return _fitted_estimate(data, cfg, window, poles, common)[0]
 
 
 def _fitted_estimate(data, cfg, window, poles, common):
-    """Fit from start ``poles``, choose the drift degree, judge and name the whirls."""
+    """Fit from start ``poles``, choose the drift, judge and name the whirls.
+
+    Returns the estimate and whether a whirl was lost (a sign without a detected,
+    in-band component: a start from the previous estimate then needs a fresh search).
+    """
     fit = _fit(data, poles, cfg.drift_degree, window)
-    whirls, noise_var = _whirls(fit, data, cfg, window)
-    # refit with the significant drift terms only and without components that are only
-    # noise, so that neither costs the whirls' frequencies precision
-    degree = _drift_degree(fit, data)
-    keep = [i for i, rec in enumerate(whirls) if not _is_noise(rec[2])]
+    whirls = _whirls(fit, data, cfg, window)
+    # Refit with the significant drift terms only, without components that are only
+    # noise, and without the smaller of two components of one sign (they would model
+    # together a modulation of one whirl, e.g. a chirp, and misplace it): none of these
+    # may cost the whirls' frequencies precision.
+    degree = _drift_degree(fit)
+    largest = {}
+    for i, (name, whirl, kind, _) in enumerate(whirls):
+        if kind != 'noise' and whirl.amplitude > largest.get(name, (-1.0, 0))[0]:
+            largest[name] = (whirl.amplitude, i)
+    keep = sorted(i for _, i in largest.values())
     if keep and (degree < cfg.drift_degree or len(keep) < len(whirls)):
-        noise = [whirls[i] for i in range(len(whirls)) if i not in keep]
         fit = _fit(data, fit.s[keep], degree, window)
-        whirls, noise_var = _whirls(fit, data, cfg, window)
-        whirls += noise
+        dropped = [rec for rec in whirls if rec[0] not in largest]
+        whirls = _whirls(fit, data, cfg, window) + dropped
     chosen = {}
-    for name, whirl, problem in whirls:   # per sign, an accepted whirl, else the largest
-        rank = (problem == '', whirl.amplitude)
+    for name, whirl, kind, problem in whirls:   # per sign: accepted, else the largest
+        rank = (kind == '', whirl.amplitude)
         if name not in chosen or rank > chosen[name][0]:
-            chosen[name] = (rank, whirl, problem)
-    reasons = []
+            chosen[name] = (rank, whirl, kind, problem)
+    reasons, lost = [], False
     for name in ('forward', 'backward'):
         if name not in chosen:
             reasons.append(f'{name}: none found')
+            lost = True
         elif chosen[name][2]:
-            reasons.append(f'{name}: {chosen[name][2]}')
-    return WhirlEstimate(forward=chosen['forward'][1] if 'forward' in chosen else Whirl(),
-                         backward=chosen['backward'][1] if 'backward' in chosen else Whirl(),
-                         offset=complex(legendre.legval(0.0, fit.drift)),
-                         noise_rms=math.sqrt(noise_var), reason='; '.join(reasons), **common)
+            reasons.append(f'{name}: {chosen[name][3]}')
+            lost = lost or chosen[name][2] in ('noise', 'band')
+    estimate = WhirlEstimate(
+        forward=chosen['forward'][1] if 'forward' in chosen else Whirl(),
+        backward=chosen['backward'][1] if 'backward' in chosen else Whirl(),
+        offset=complex(legendre.legval(0.0, fit.drift)), noise_rms=math.sqrt(fit.noise_var),
+        reason='; '.join(reasons), **common)
+    return estimate, lost
 
 
 # -- online --------------------------------------------------------------------------
@@ -585,10 +594,10 @@ class WhirlEstimator:
     The window holds the samples of the last ``window`` seconds; every
     ``update_interval`` seconds of sample time (once the window has filled) ``push``
     runs :func:`estimate_whirl` on it, starting the fit from the previous estimate's
-    whirls (and searching afresh when that start does not give both). Samples may
-    arrive irregularly (dropped, jittered): the estimate handles that, and reports
-    NaN for a gap longer than
-    ``settings.max_gap`` of the window. Memory is a ring of about twice the window.
+    whirls (and searching afresh when that start loses one). Samples may arrive
+    irregularly (dropped, jittered): the estimate handles that, and reports NaN for a
+    gap longer than ``settings.max_gap`` of the window. Memory is a ring of about
+    twice the window.
 
     Args:
         window: length of the analysed window, s (1 s resolves whirls above 0.1 Hz).
