@@ -22,11 +22,12 @@ a decay rate:
    the 1000 samples of a 1 s window at 1 kHz. Irregular times (dropped or jittered
    samples) are handled exactly: the model is then averaged over each block's own
    sample times.
-2. Start values: the likelihood-ratio statistic of one tone against the drift alone
-   (the periodogram of the drift-free part, normalized by what the drift leaves of a
-   tone; zero-padded FFT). Its strongest peak gives the first whirl, which is fitted;
-   the strongest peak of the opposite sign in the residual gives the second. The
-   online estimator starts from its previous estimate instead.
+2. Start values, from the zero-padded FFT of the block means with the drift projected
+   out: its strongest peak gives the first whirl, which is fitted; in the residual,
+   the strongest peak of the opposite sign of the likelihood-ratio statistic of one
+   tone against the drift alone (the spectrum normalized by what the drift leaves of
+   a tone, which finds a whirl slow enough for the drift to take most of it) gives
+   the second. The online estimator starts from its previous estimate instead.
 3. Joint fit: Gauss-Newton over the two complex poles s = -decay + i 2pi f, with the
    amplitudes and the drift coefficients solved by linear least squares for each
    trial (variable projection), first with a drift of degree ``drift_degree``, then
@@ -415,24 +416,28 @@ def _peak(stat, freqs, allowed):
 def _start_values(grid, interval, cfg, window):
     """Start poles (1/s): the strongest whirl, then the strongest of the other sign.
 
-    The statistic is |b_f^H y_perp|^2 / |b_f_perp|^2 (b_f a tone at f, _perp: with the
-    drift projected out): the likelihood-ratio test of one tone against drift alone.
+    With the drift projected out (y_perp), the first is the frequency that captures
+    most energy, |b_f^H y_perp|^2 for a tone b_f at f; it is then fitted. The second
+    maximizes |b_f^H r|^2 / |b_f_perp|^2 in the residual r: the likelihood-ratio test
+    of one tone against the drift alone, which also finds a whirl so slow that the
+    drift takes most of it. (With two whirls present the ratio is not safe for the
+    first: the little the drift leaves of a slow tone makes the other whirl's leakage
+    look large at low frequency.)
     """
     q, tone_norm, nfft = _deflation(grid.m, cfg.drift_degree)
     freqs = np.fft.fftfreq(nfft, interval)
     in_band = ((np.abs(freqs) >= cfg.min_cycles / window)
                & (np.abs(freqs) <= cfg.max_frequency) & (tone_norm > 1e-9 * grid.m))
-    norm = np.where(in_band, tone_norm, 1.0)
     y_perp = grid.y - q @ (q.T @ grid.y)
-    f_first = _peak(np.abs(np.fft.fft(y_perp, nfft)) ** 2 / norm, freqs, in_band)
+    f_first = _peak(np.abs(np.fft.fft(y_perp, nfft)) ** 2, freqs, in_band)
     if math.isnan(f_first):
         return []
-    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window, tolerance=1e-3,
-                 covariance=False)
-    rest = first.residual
+    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window,
+                 tolerance=1e-3, covariance=False)
     f_first = first.s[0].imag / TWO_PI
     other = in_band & (freqs * f_first < 0)
-    f_second = _peak(np.abs(np.fft.fft(rest, nfft)) ** 2 / norm, freqs, other)
+    ratio = np.abs(np.fft.fft(first.residual, nfft)) ** 2 / np.where(in_band, tone_norm, 1.0)
+    f_second = _peak(ratio, freqs, other)
     return [first.s[0]] + ([] if math.isnan(f_second) else [1j * TWO_PI * f_second])
 
 
