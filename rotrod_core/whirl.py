@@ -68,6 +68,7 @@ TWO_PI = 2.0 * math.pi
 _REGULAR_JITTER = 1e-3      # steps within this fraction of the median step count as regular
 _ROUNDOFF = 1e-10           # amplitudes below this fraction of max |z| are float round-off
 _MAX_ITERATIONS = 30
+_START_ITERATIONS = 4       # for the first whirl alone: a start value, the other unmodelled
 _DRIFT_SIGNIFICANCE = 25.0  # (|c| / std c)^2 above which a drift term is kept
 _ZERO_PAD = 8               # periodogram length: this many times the number of blocks
 
@@ -222,7 +223,7 @@ def estimate_whirl(t, u, v, settings: WhirlSettings | None = None) -> WhirlEstim
         settings: model and acceptance limits (defaults: :class:`WhirlSettings`).
     """
     t, z = samples_as_complex(t, u, v)
-    return _estimate(t, z, settings or WhirlSettings())
+    return _estimate(t, z, settings or WhirlSettings())[0]
 
 
 def estimate_whirl_frequencies(t, u, v, settings: WhirlSettings | None = None) -> tuple:
@@ -339,14 +340,15 @@ def _solve(a, b):
     return x
 
 
-def _fit(data, s, degree, window, tolerance=1e-8, covariance=True):
+def _fit(data, s, degree, window, tolerance=1e-8, covariance=True,
+         iterations=_MAX_ITERATIONS):
     """Least squares over poles ``s`` (1/s), amplitudes and drift, from start poles ``s``.
 
     Variable projection: the amplitudes and drift are solved exactly for each trial of
     the poles; the poles move along the Gauss-Newton direction of the joint problem
     (Kaufman's approximation), shortened until the residual decreases. Stops when an
-    update moves every pole's phase over the window by less than ``tolerance`` rad.
-    ``covariance``: also the parameters' variances (else left NaN).
+    update moves every pole's phase over the window by less than ``tolerance`` rad, or
+    after ``iterations``. ``covariance``: also the parameters' variances (else NaN).
     """
     s = np.asarray(s, dtype=complex)
     k = len(s)
@@ -361,7 +363,7 @@ def _fit(data, s, degree, window, tolerance=1e-8, covariance=True):
         return basis, de, lin, r, float(np.vdot(r, r).real)
 
     basis, de, lin, r, cost = project(s)
-    for _ in range(_MAX_ITERATIONS):
+    for _ in range(iterations):
         step = _solve(np.concatenate((de * lin[:k], basis), axis=1), r)[:k]
         scale = 1.0
         while scale > 1e-4:
@@ -432,8 +434,8 @@ def _start_values(grid, interval, cfg, window):
     f_first = _peak(np.abs(np.fft.fft(y_perp, nfft)) ** 2, freqs, in_band)
     if math.isnan(f_first):
         return []
-    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window,
-                 tolerance=1e-3, covariance=False)
+    first = _fit(grid, [1j * TWO_PI * f_first], cfg.drift_degree, window, tolerance=1e-3,
+                 covariance=False, iterations=_START_ITERATIONS)
     f_first = first.s[0].imag / TWO_PI
     other = in_band & (freqs * f_first < 0)
     ratio = np.abs(np.fft.fft(first.residual, nfft)) ** 2 / np.where(in_band, tone_norm, 1.0)
@@ -444,7 +446,7 @@ def _start_values(grid, interval, cfg, window):
 # -- estimate ------------------------------------------------------------------------
 
 def _no_estimate(reason, **kw):
-    return WhirlEstimate(reason=reason, **kw)
+    return WhirlEstimate(reason=reason, **kw), []
 
 
 def _block_gain(data, s):
@@ -471,7 +473,7 @@ def _drift_degree(fit):
 
 
 def _whirls(fit, data, cfg, window):
-    """(name, whirl, kind, problem) per fitted pole; kind and problem '' if accepted.
+    """(name, whirl, kind, problem, pole) per fitted pole; kind, problem '' if accepted.
 
     kind: 'noise' (not detected), 'band', 'decay' or 'std' (see the module docstring).
     """
@@ -505,19 +507,17 @@ def _whirls(fit, data, cfg, window):
                                     f'{cfg.max_relative_std:g} x {f:.4g} Hz')
         whirl = Whirl(frequency=math.nan if kind else f, amplitude=amp, decay_rate=decay,
                       snr_db=snr_db, frequency_std=std)
-        out.append(('forward' if fit.s[i].imag > 0 else 'backward', whirl, kind, problem))
+        out.append(('forward' if fit.s[i].imag > 0 else 'backward', whirl, kind, problem,
+                    fit.s[i]))
     return out
 
 
-def _poles(estimate):
-    """The accepted whirls of an estimate as poles, 1/s (start values for the next)."""
-    return [-w.decay_rate + sign * 1j * TWO_PI * w.frequency
-            for w, sign in ((estimate.forward, 1), (estimate.backward, -1))
-            if not math.isnan(w.frequency)]
+def _estimate(t, z, cfg: WhirlSettings, start=None):
+    """The estimate of one window, and the poles (1/s) of its whirls.
 
-
-def _estimate(t, z, cfg: WhirlSettings, start=None) -> WhirlEstimate:
-    """The estimate of one window; ``start``: poles (1/s) to start from, else searched."""
+    The poles include whirls rejected for decay or uncertainty: they are the start
+    values for the next window. ``start``: poles to start from (else searched).
+    """
     n = len(t)
     if n < 2:
         return _no_estimate(f'too few samples ({n})', samples=n)
@@ -538,21 +538,23 @@ def _estimate(t, z, cfg: WhirlSettings, start=None) -> WhirlEstimate:
         return _no_estimate(f'window too short: {data.m} blocks, {cfg.min_blocks} needed',
                             **common)
     if start:
-        warm, lost = _fitted_estimate(data, cfg, window, start, common)
+        warm, lost, poles = _fitted_estimate(data, cfg, window, start, common)
         if not lost:
-            return warm
+            return warm, poles
     grid = _Grid(data.grid, data.grid_tau, cfg.drift_degree)
     poles = _start_values(grid, data.interval, cfg, window)
     if not poles:
         return _no_estimate('no frequency in the band', **common)
-    return _fitted_estimate(data, cfg, window, poles, common)[0]
+    estimate, _, poles = _fitted_estimate(data, cfg, window, poles, common)
+    return estimate, poles
 
 
 def _fitted_estimate(data, cfg, window, poles, common):
     """Fit from start ``poles``, choose the drift, judge and name the whirls.
 
-    Returns the estimate and whether a whirl was lost (a sign without a detected,
-    in-band component: a start from the previous estimate then needs a fresh search).
+    Returns the estimate, whether a whirl was lost (a sign without a detected, in-band
+    component: a start from the previous estimate then needs a fresh search), and the
+    poles of the whirls detected in band.
     """
     fit = _fit(data, poles, cfg.drift_degree, window)
     whirls = _whirls(fit, data, cfg, window)
@@ -562,7 +564,7 @@ def _fitted_estimate(data, cfg, window, poles, common):
     # may cost the whirls' frequencies precision.
     degree = _drift_degree(fit)
     largest = {}
-    for i, (name, whirl, kind, _) in enumerate(whirls):
+    for i, (name, whirl, kind, _, _) in enumerate(whirls):
         if kind != 'noise' and whirl.amplitude > largest.get(name, (-1.0, 0))[0]:
             largest[name] = (whirl.amplitude, i)
     keep = sorted(i for _, i in largest.values())
@@ -571,10 +573,10 @@ def _fitted_estimate(data, cfg, window, poles, common):
         dropped = [rec for rec in whirls if rec[0] not in largest]
         whirls = _whirls(fit, data, cfg, window) + dropped
     chosen = {}
-    for name, whirl, kind, problem in whirls:   # per sign: accepted, else the largest
+    for name, whirl, kind, problem, pole in whirls:   # per sign: accepted, else largest
         rank = (kind == '', whirl.amplitude)
         if name not in chosen or rank > chosen[name][0]:
-            chosen[name] = (rank, whirl, kind, problem)
+            chosen[name] = (rank, whirl, kind, problem, pole)
     reasons, lost = [], False
     for name in ('forward', 'backward'):
         if name not in chosen:
@@ -588,7 +590,8 @@ def _fitted_estimate(data, cfg, window, poles, common):
         backward=chosen['backward'][1] if 'backward' in chosen else Whirl(),
         offset=complex(legendre.legval(0.0, fit.drift)), noise_rms=math.sqrt(fit.noise_var),
         reason='; '.join(reasons), **common)
-    return estimate, lost
+    poles = [c[4] for c in chosen.values() if c[2] not in ('noise', 'band')]
+    return estimate, lost, poles
 
 
 # -- online --------------------------------------------------------------------------
@@ -626,6 +629,12 @@ class WhirlEstimator:
         capacity = 2 * int(math.ceil(self.window / self.sample_interval)) + 16
         self._t = np.empty(capacity)
         self._z = np.empty(capacity, dtype=complex)
+        # the start-value tables for the expected window, now rather than in an update
+        per_block = max(1, int(math.floor(self.settings.block_interval / self.sample_interval
+                                          + 1e-6)))
+        blocks = int(round(self.window / self.sample_interval)) // per_block
+        if blocks >= self.settings.min_blocks:
+            _deflation(blocks, self.settings.drift_degree)
         self.reset()
 
     def reset(self) -> None:
@@ -633,6 +642,7 @@ class WhirlEstimator:
         self._begin = self._end = 0
         self._first = math.nan
         self._last_update = -math.inf
+        self._poles = []
         self.estimate = WhirlEstimate(reason='window not filled')
 
     @property
@@ -674,9 +684,9 @@ class WhirlEstimator:
         newest = self._t[self._end - 1]
         oldest = newest - self.window + 0.5 * self.sample_interval
         self._begin += int(np.searchsorted(self._t[self._begin:self._end], oldest))
-        self.estimate = _estimate(self._t[self._begin:self._end],
-                                  self._z[self._begin:self._end], self.settings,
-                                  start=_poles(self.estimate))
+        self.estimate, self._poles = _estimate(self._t[self._begin:self._end],
+                                               self._z[self._begin:self._end],
+                                               self.settings, start=self._poles)
         self._last_update = newest
         return self.estimate
 
