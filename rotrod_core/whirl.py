@@ -192,7 +192,7 @@ class WhirlEstimate:
                    for w in (self.forward, self.backward))
 
 
-def samples_as_complex(t, u, v):
+def _samples(t, u, v):
     """Validated float arrays ``t`` (s) and ``z = u + i v`` (m); ValueError if unusable."""
     try:
         arrays = [np.asarray(x, dtype=float).ravel() for x in (t, u, v)]
@@ -222,7 +222,7 @@ def estimate_whirl(t, u, v, settings: WhirlSettings | None = None) -> WhirlEstim
         v: tangential deflection, m.
         settings: model and acceptance limits (defaults: :class:`WhirlSettings`).
     """
-    t, z = samples_as_complex(t, u, v)
+    t, z = _samples(t, u, v)
     return _estimate(t, z, settings or WhirlSettings())[0]
 
 
