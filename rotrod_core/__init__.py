@@ -3,7 +3,7 @@
 The rigid-flexible coupled model of Liu et al. (Appl. Math. Modell. 2014), with the
 exact Lagrangian torque coupling, in SI units throughout. Public contract:
 ``RodParams``, ``Eq26Profile``, ``simulate``, ``dynamic_frequencies``,
-``critical_speed`` and the other names below.
+``critical_speed``, ``estimate_whirl_frequencies`` and the other names below.
 """
 
 from .analysis import (
@@ -32,13 +32,22 @@ from .profiles import (
 from .result import SimulationResult
 from .simulate import simulate
 from .stepper import NonFiniteStateError, RealTimeStepper
+from .whirl import (
+    Whirl,
+    WhirlEstimate,
+    WhirlEstimator,
+    WhirlSettings,
+    estimate_whirl,
+    estimate_whirl_frequencies,
+)
 
 __all__ = [
     'BatchResult', 'CampbellDiagram', 'ConstantProfile', 'DEFAULT_HUB_INERTIA',
     'Eq26Profile', 'ModalAnalysis', 'Mode', 'NonFiniteStateError', 'Profile', 'RampProfile',
     'RealTimeStepper', 'RodParams', 'SimulationResult', 'SineSweepProfile', 'State',
     'StepProfile',
-    'TableProfile', 'campbell', 'critical_speed', 'critical_speed_for_profile',
-    'disk_inertia', 'dynamic_frequencies', 'make_profile', 'modal_analysis',
+    'TableProfile', 'Whirl', 'WhirlEstimate', 'WhirlEstimator', 'WhirlSettings', 'campbell',
+    'critical_speed', 'critical_speed_for_profile', 'disk_inertia', 'dynamic_frequencies',
+    'estimate_whirl', 'estimate_whirl_frequencies', 'make_profile', 'modal_analysis',
     'simulate', 'simulate_batch', 'static_deflection',
 ]

@@ -1,0 +1,350 @@
+"""Whirl-frequency estimation against Eq. 28, the Cramer-Rao bound and the Eq. 26 run.
+
+Reference values come from test/reference.py (MODEL.md's closed forms, written apart
+from rotrod_core): Eq. 28 gives f1 = (w0 - w) / 2pi for the forward whirl, at positive
+frequency of z = u + i v, and f2 = (w0 + w) / 2pi for the backward whirl, at negative
+frequency.
+
+Cramer-Rao bound for the frequency of one complex tone z_n = A exp(i(w n dt + phi))
++ e_n in circular complex white noise with E|e_n|^2 = sigma^2 (total over real and
+imaginary parts), A, phi, w unknown: the Fisher information of (w, phi) is
+(2 A^2 / sigma^2) [[dt^2 sum n^2, dt sum n], [dt sum n, N]], whose inverse gives
+
+    var(w_hat) >= 6 sigma^2 / (A^2 dt^2 N (N^2 - 1))   (rad/s)^2,
+
+so std(f_hat) >= sqrt(6 sigma^2 / (A^2 N (N^2 - 1))) / (2 pi dt) Hz. SNR = A^2 / sigma^2.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from reference import R0, W0, eq26, step_start
+
+from rotrod_core import (
+    ConstantProfile,
+    Eq26Profile,
+    RodParams,
+    WhirlEstimator,
+    WhirlSettings,
+    estimate_whirl,
+    estimate_whirl_frequencies,
+    modal_analysis,
+    simulate,
+)
+
+P = RodParams()
+DT = 1e-3
+N = 1000
+T = np.arange(N) * DT          # a 1 s window at 1 kHz
+
+
+def eq28(w):
+    return (W0 - w) / (2 * math.pi), (W0 + w) / (2 * math.pi)
+
+
+def crb_std(amplitude, sigma2, n=N, dt=DT):
+    """Cramer-Rao standard deviation (Hz) of a complex tone's frequency (module doc)."""
+    return math.sqrt(6 * sigma2 / (amplitude**2 * n * (n * n - 1))) / (2 * math.pi * dt)
+
+
+def relative_errors(f, w):
+    f1, f2 = eq28(w)
+    return abs(f[0] / f1 - 1), abs(f[1] / f2 - 1)
+
+
+def complex_noise(rng, sigma2, n=N):
+    return math.sqrt(sigma2 / 2) * (rng.standard_normal(n) + 1j * rng.standard_normal(n))
+
+
+# -- noise-free: Eq. 28 to 0.1 % across [0, 0.9 w0] -------------------------------------
+
+@pytest.mark.parametrize('fraction', [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
+def test_step_start_at_constant_w_gives_eq28(fraction):
+    """From rest at constant w (MODEL.md step start): both whirls and the static offset."""
+    w = fraction * W0
+    run = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT)
+    assert len(run.t) == N
+    est = estimate_whirl(run.t, run.u, run.v)
+    assert est.reason == ''
+    assert max(relative_errors((est.f1, est.f2), w)) < 1e-3
+    # the fitted offset is the static deflection, the amplitudes those of Eq. 29
+    u_s = w * w * R0 / (W0 * W0 - w * w)
+    assert est.offset.real == pytest.approx(u_s, rel=1e-6)
+    scale = w * w * R0 / (2 * W0)
+    assert est.forward.amplitude == pytest.approx(scale / (W0 - w), rel=1e-6)
+    assert est.backward.amplitude == pytest.approx(scale / (W0 + w), rel=1e-6)
+
+
+@pytest.mark.parametrize('fraction', [0.0, 0.3, 0.6, 0.9])
+def test_plucked_rod_at_constant_w_gives_eq28(fraction):
+    """An initial deflection excites both whirls, also at rest (w = 0: f1 = f2 = f0)."""
+    w = fraction * W0
+    run = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT, initial={'u': 1e-3})
+    f = estimate_whirl_frequencies(run.t, run.u, run.v)
+    assert max(relative_errors(f, w)) < 1e-3
+
+
+def test_dropped_and_jittered_samples_are_handled_exactly():
+    """Irregular times: 30 % of the samples dropped at random, the rest jittered."""
+    rng = np.random.default_rng(7)
+    w = 2.0
+    keep = np.sort(rng.choice(N, int(0.7 * N), replace=False))
+    t = T[keep] + rng.uniform(-0.3, 0.3, len(keep)) * DT
+    z = step_start(t, w)
+    est = estimate_whirl(t, z.real, z.imag)
+    assert est.samples == len(t) and est.reason == ''
+    assert max(relative_errors((est.f1, est.f2), w)) < 1e-9
+
+
+def test_a_drifting_offset_is_modelled():
+    """Whirls on top of an offset that drifts as a cubic in time (as in a spin-up)."""
+    w = 2.0
+    z = step_start(T, w) + 2e-3 * (1 + 0.5 * T - 0.8 * T**2 + 0.6 * T**3)
+    f = estimate_whirl_frequencies(T, z.real, z.imag)
+    assert max(relative_errors(f, w)) < 1e-9
+    # the same window with the drift modelled as a constant is badly off
+    f0 = estimate_whirl_frequencies(T, z.real, z.imag, WhirlSettings(drift_degree=0))
+    assert not max(relative_errors(f0, w)) < 1e-3
+
+
+def test_damped_whirls_give_the_modal_frequencies_and_decay_rates():
+    params = RodParams(damping_ratio=0.02)
+    run = simulate(params, ConstantProfile(2.0), (N - 1) * DT, dt=DT)
+    est = estimate_whirl(run.t, run.u, run.v)
+    modes = {m.whirl: m for m in modal_analysis(params, 2.0).modes}
+    for whirl, mode in ((est.forward, modes['forward']), (est.backward, modes['backward'])):
+        assert whirl.frequency == pytest.approx(mode.frequency, rel=1e-9)
+        assert whirl.decay_rate == pytest.approx(-mode.growth_rate, rel=1e-6)
+
+
+def test_the_sign_of_frequency_separates_the_whirls():
+    tone = 1e-3 * np.exp(2j * math.pi * 1.7 * T) + 5e-3
+    forward = estimate_whirl(T, tone.real, tone.imag)
+    assert forward.f1 == pytest.approx(1.7, rel=1e-12) and math.isnan(forward.f2)
+    assert 'backward' in forward.reason
+    backward = estimate_whirl(T, tone.real, -tone.imag)       # conjugate: negative f
+    assert backward.f2 == pytest.approx(1.7, rel=1e-12) and math.isnan(backward.f1)
+    assert 'forward' in backward.reason
+
+
+def test_a_single_chirping_whirl_is_estimated_at_the_window_centre():
+    """One whirl whose frequency falls at 0.04 Hz/s (an Eq. 26 spin-up's largest rate),
+    nothing at negative frequency: the estimate is the frequency at the centre."""
+    rate, f_centre = -0.04, 1.7
+    tau = T - T.mean()
+    z = 2.8e-3 + 5e-8 * np.exp(2j * math.pi * (f_centre * tau + 0.5 * rate * tau**2))
+    est = estimate_whirl(T, z.real, z.imag)
+    assert est.f1 == pytest.approx(f_centre, rel=1e-3) and est.time == pytest.approx(T.mean())
+    assert math.isnan(est.f2)
+
+
+# -- noise: within 3x the Cramer-Rao bound ----------------------------------------------
+
+@pytest.mark.parametrize('w', [0.0, 2.0, 0.5 * W0])
+def test_40_db_noise_rms_error_within_three_times_the_cramer_rao_bound(w):
+    """200 trials; each whirl at 40 dB SNR (A^2 / sigma^2 = 1e4) beside a static offset."""
+    rng = np.random.default_rng(2014)
+    f1, f2 = eq28(w)
+    amplitude, sigma2 = 1e-3, 1e-10
+    clean = (2.8e-3 + amplitude * np.exp(1j * (2 * math.pi * f1 * T + 0.4))
+             + amplitude * np.exp(-1j * (2 * math.pi * f2 * T - 1.3)))
+    err, std, quality = [], [], []
+    for _ in range(200):
+        z = clean + complex_noise(rng, sigma2)
+        est = estimate_whirl(T, z.real, z.imag)
+        err.append((est.f1 - f1, est.f2 - f2))
+        std.append((est.forward.frequency_std, est.backward.frequency_std))
+        quality.append(est.quality)
+    err = np.array(err)
+    assert not np.any(np.isnan(err)), 'a whirl went undetected at 40 dB'
+    rms = np.sqrt(np.mean(err**2, axis=0))
+    bound = crb_std(amplitude, sigma2)
+    assert np.all(rms <= 3 * bound), (rms / bound)
+    # the reported standard deviation is the bound with nuisance parameters: >= CRB
+    assert np.all(np.mean(std, axis=0) >= 0.9 * bound)
+    assert np.all(np.mean(std, axis=0) <= 2.0 * bound)
+    assert np.median(quality) == pytest.approx(40.0, abs=0.5)
+
+
+def test_40_db_noise_on_simulated_motion():
+    """Step start at 2 rad/s plus white noise at 40 dB of the weaker (backward) whirl."""
+    rng = np.random.default_rng(28)
+    w = 2.0
+    run = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT)
+    clean = run.u + 1j * run.v
+    scale = w * w * R0 / (2 * W0)
+    a1, a2 = scale / (W0 - w), scale / (W0 + w)
+    sigma2 = a2**2 / 1e4
+    f = np.array([estimate_whirl_frequencies(T, z.real, z.imag)
+                  for z in (clean + complex_noise(rng, sigma2) for _ in range(200))])
+    rms = np.sqrt(np.mean((f - eq28(w)) ** 2, axis=0))
+    assert rms[0] <= 3 * crb_std(a1, sigma2)
+    assert rms[1] <= 3 * crb_std(a2, sigma2)
+
+
+# -- Eq. 26 spin-up: tracking within 2 % -------------------------------------------------
+
+def test_online_estimator_tracks_the_eq26_spin_up():
+    """Every estimate from the first filled window to the end of the spin-up (15 s).
+
+    An estimate describes its window's centre (``time``): a frequency drifting
+    linearly over the window is estimated at its centre value. Held against Eq. 28
+    at w(centre) and, stricter, at w of the newest sample (half a window later).
+    """
+    run = simulate(P, Eq26Profile(), 15.0, dt=DT)
+    estimator = WhirlEstimator(window=1.0, sample_interval=DT, update_interval=0.1)
+    estimates = [e for e in (estimator.push(*s) for s in zip(run.t, run.u, run.v)) if e]
+    assert len(estimates) == 141
+    assert estimates[0].time == pytest.approx(0.4995)
+    for est in estimates:
+        centre = relative_errors((est.f1, est.f2), eq26(est.time)[0])
+        newest = relative_errors((est.f1, est.f2), eq26(est.time + est.window / 2)[0])
+        assert max(centre) <= 0.02, (est.time, centre, est.reason)
+        assert max(newest) <= 0.02, (est.time, newest, est.reason)
+
+
+def test_online_estimate_equals_the_batch_estimate_of_its_window():
+    run = simulate(P, Eq26Profile(), 8.0, dt=DT)
+    estimator = WhirlEstimator(window=1.0, sample_interval=DT, update_interval=0.5)
+    for s in zip(run.t, run.u, run.v):
+        estimator.push(*s)
+    online = estimator.update()
+    batch = estimate_whirl(run.t[-N:], run.u[-N:], run.v[-N:])
+    assert online.samples == N and online.time == batch.time
+    assert online.f1 == pytest.approx(batch.f1, rel=1e-7)   # fits converged to 1e-8 rad
+    assert online.f2 == pytest.approx(batch.f2, rel=1e-7)
+
+
+# -- no estimate -------------------------------------------------------------------------
+
+def test_no_motion_and_a_pure_static_offset_give_no_estimate():
+    at_rest = simulate(P, ConstantProfile(0.0), (N - 1) * DT, dt=DT)     # z = 0
+    w = 2.0
+    u_s = w * w * R0 / (W0 * W0 - w * w)
+    static = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT, initial={'u': u_s})
+    for run in (at_rest, static):
+        est = estimate_whirl(run.t, run.u, run.v)
+        assert math.isnan(est.f1) and math.isnan(est.f2)
+        assert est.quality == -math.inf
+
+
+def test_a_damped_out_vibration_gives_no_estimate():
+    """Rotating damping zeta = 0.1: after 30 s the whirls are gone (e^-36)."""
+    run = simulate(RodParams(damping_ratio=0.1), ConstantProfile(2.0), 30.0, dt=DT)
+    est = estimate_whirl(run.t[-N:], run.u[-N:], run.v[-N:])
+    assert math.isnan(est.f1) and math.isnan(est.f2), est
+    assert 'no oscillation' in est.reason
+
+
+def test_a_whirl_decaying_fast_within_the_window_gives_no_estimate():
+    z = 1e-3 * np.exp((-3.0 + 2j * math.pi * 1.7) * T) + 1e-3 * np.exp(-2j * math.pi * 2.2 * T)
+    est = estimate_whirl(T, z.real, z.imag)
+    assert math.isnan(est.f1) and 'decays' in est.reason
+    assert est.f2 == pytest.approx(2.2, rel=1e-9)
+
+
+def test_pure_noise_gives_no_estimate():
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        z = 2.8e-3 + complex_noise(rng, 1e-10)
+        f = estimate_whirl_frequencies(T, z.real, z.imag)
+        assert np.all(np.isnan(f)), f
+
+
+def test_whirls_buried_in_noise_give_no_estimate():
+    """-30 dB per sample (0 dB over the window): too noisy for a usable frequency."""
+    rng = np.random.default_rng(6)
+    z = 1e-6 * (np.exp(2j * math.pi * 1.6 * T) + np.exp(-2j * math.pi * 2.2 * T))
+    for _ in range(20):
+        noisy = z + complex_noise(rng, 1e-9)
+        f = estimate_whirl_frequencies(T, noisy.real, noisy.imag)
+        assert np.all(np.isnan(f)), f
+
+
+def test_a_too_short_window_gives_no_estimate():
+    z = step_start(T[:100], 2.0)
+    est = estimate_whirl(T[:100], z.real, z.imag)
+    assert math.isnan(est.f1) and math.isnan(est.f2) and 'too short' in est.reason
+    assert estimate_whirl(T[:1], z.real[:1], z.imag[:1]).reason.startswith('too few')
+
+
+def test_a_long_gap_gives_no_estimate_a_short_one_an_exact_one():
+    z = step_start(T, 2.0)
+    short = (T < 0.40) | (T >= 0.45)
+    long = (T < 0.40) | (T >= 0.55)
+    assert max(relative_errors(estimate_whirl_frequencies(T[short], z.real[short],
+                                                          z.imag[short]), 2.0)) < 1e-9
+    est = estimate_whirl(T[long], z.real[long], z.imag[long])
+    assert math.isnan(est.f1) and math.isnan(est.f2) and 'gap' in est.reason
+
+
+def test_a_whirl_too_slow_for_the_window_gives_no_estimate():
+    """At 0.95 w0 the forward whirl makes 0.097 cycles in 1 s: below min_cycles (0.1)."""
+    w = 0.95 * W0
+    run = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT)
+    est = estimate_whirl(run.t, run.u, run.v)
+    assert math.isnan(est.f1) and 'outside the band' in est.reason
+    assert est.f2 == pytest.approx(eq28(w)[1], rel=1e-6)
+
+
+def test_unusable_input_is_refused():
+    z = step_start(T, 2.0)
+    u, v = z.real.copy(), z.imag.copy()
+    u[10] = np.nan
+    with pytest.raises(ValueError, match='finite'):
+        estimate_whirl(T, u, v)
+    with pytest.raises(ValueError, match='equal lengths'):
+        estimate_whirl(T[:-1], z.real, z.imag)
+    t = T.copy()
+    t[500] = t[499]
+    with pytest.raises(ValueError, match='increase strictly'):
+        estimate_whirl(t, z.real, z.imag)
+    with pytest.raises(ValueError, match='drift_degree'):
+        WhirlSettings(drift_degree=-1)
+    with pytest.raises(ValueError, match='max_frequency'):
+        WhirlSettings(max_frequency=0.0)
+
+
+def test_online_estimator_before_the_window_fills_and_on_bad_samples():
+    estimator = WhirlEstimator(window=1.0, sample_interval=DT, update_interval=0.1)
+    z = step_start(T, 2.0)
+    for k in range(N - 1):
+        assert estimator.push(T[k], z.real[k], z.imag[k]) is None
+    assert not estimator.filled
+    assert math.isnan(estimator.estimate.f1) and 'not filled' in estimator.estimate.reason
+    assert 'not filled' in estimator.update().reason
+    with pytest.raises(ValueError, match='finite'):
+        estimator.push(T[-1], math.nan, 0.0)
+    with pytest.raises(ValueError, match='increase strictly'):
+        estimator.push(T[-2], 0.0, 0.0)
+    est = estimator.push(T[-1], z.real[-1], z.imag[-1])     # the refused ones left no trace
+    assert estimator.filled and est is estimator.estimate and est.samples == N
+    assert max(relative_errors((est.f1, est.f2), 2.0)) < 1e-9
+    estimator.reset()
+    assert not estimator.filled and math.isnan(estimator.estimate.f2)
+
+
+def test_online_estimator_outgrows_a_wrong_sample_interval():
+    """Samples ten times denser than announced: the ring grows, the estimate is exact."""
+    estimator = WhirlEstimator(window=1.0, sample_interval=10 * DT, update_interval=0.5)
+    t = np.arange(3 * N) * DT
+    z = step_start(t, 2.0)
+    for s in zip(t, z.real, z.imag):
+        estimator.push(*s)
+    est = estimator.update()
+    assert est.samples >= N - 10
+    assert max(relative_errors((est.f1, est.f2), 2.0)) < 1e-9
+
+
+def test_online_estimator_with_dropped_messages():
+    """A fifth of the messages lost at random: the estimates stay exact."""
+    rng = np.random.default_rng(11)
+    t = np.arange(3 * N) * DT
+    t = t[rng.random(len(t)) > 0.2]
+    z = step_start(t, 2.0)
+    estimator = WhirlEstimator(window=1.0, sample_interval=DT, update_interval=0.25)
+    estimates = [e for e in (estimator.push(*s) for s in zip(t, z.real, z.imag)) if e]
+    assert len(estimates) >= 8
+    for est in estimates:
+        assert max(relative_errors((est.f1, est.f2), 2.0)) < 1e-9, est.reason
