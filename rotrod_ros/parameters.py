@@ -18,6 +18,8 @@ from rotrod_core.model import COUPLINGS, STATE_FIELDS
 from rotrod_core.params import SECTIONS, RodParams
 
 EXECUTORS = ('single_threaded', 'events')
+MIN_ESTIMATE_SAMPLES = 20
+"""Fewest publications an estimate window may hold."""
 
 
 @dataclass(frozen=True)
@@ -111,6 +113,11 @@ NODE_SPECS = (
          read_only=True),
     Spec('diagnostics_rate', 1.0, 'rate of /diagnostics (also sent on a change of level), '
          'Hz of wall time', 0.01, 100.0),
+    Spec('estimate_window', 1.0,
+         'window of the whirl-frequency estimate from the published tip motion '
+         '(frequencies/estimate), s of simulated time; 0 = no estimate', 0.0, 60.0),
+    Spec('estimate_rate', 10.0,
+         'rate of frequencies/estimate, Hz of simulated time (<= publish_rate)', 0.01, 1e3),
     Spec('executor', 'single_threaded',
          'rclpy executor for commands, services and parameters: single_threaded | events '
          '(rclpy\'s experimental EventsExecutor: measured worse, see '
@@ -135,6 +142,8 @@ class NodeSettings:
     disk_radius: float = 0.15
     frame_prefix: str = ''
     diagnostics_rate: float = 1.0
+    estimate_window: float = 1.0
+    estimate_rate: float = 10.0
     executor: str = 'single_threaded'
 
     @property
@@ -189,6 +198,14 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     if node.publish_rate > engine.physics_rate:
         raise ValueError(f'publish_rate {node.publish_rate:g} Hz exceeds physics_rate '
                          f'{engine.physics_rate:g} Hz: there would be nothing new to publish')
+    if node.estimate_window:
+        if node.estimate_window < MIN_ESTIMATE_SAMPLES * node.publish_period:
+            raise ValueError(f'estimate_window {node.estimate_window:g} s holds fewer than '
+                             f'{MIN_ESTIMATE_SAMPLES} publications at publish_rate '
+                             f'{node.publish_rate:g} Hz: too few samples to estimate from')
+        if node.estimate_rate > node.publish_rate:
+            raise ValueError(f'estimate_rate {node.estimate_rate:g} Hz exceeds publish_rate '
+                             f'{node.publish_rate:g} Hz: estimates are made on publications')
     return engine, node
 
 

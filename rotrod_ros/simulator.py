@@ -11,6 +11,9 @@ Publications (every 1/publish_rate of simulated time):
   tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating)
   tip/position    geometry_msgs/PointStamped   mass position, m, in frame 'world'
   frequencies     std_msgs/Float64MultiArray   [f1, f2] Hz at the current w
+  frequencies/estimate  std_msgs/Float64MultiArray  [f1, f2] Hz estimated from the
+                  published (u, v) over the last estimate_window (NaN: no estimate),
+                  every 1/estimate_rate; it describes the window's middle
   markers         visualization_msgs/MarkerArray  disk, rod, mass, trail (frame 'world')
   /diagnostics    diagnostic_msgs/DiagnosticArray  OK / WARN / ERROR with the reason
   /clock          rosgraph_msgs/Clock          simulated time, when real_time_factor != 1
@@ -52,6 +55,7 @@ from std_srvs.srv import SetBool, Trigger
 from rotrod_core.engine import ERROR, CommandRejected, SimulationEngine
 from rotrod_core.geometry import rod_centerline, sphere_radius
 from rotrod_core.model import State
+from rotrod_core.whirl import WhirlEstimator
 
 from . import messages, node_main
 from .node_main import ConfigurationError
@@ -135,6 +139,9 @@ class SimulatorNode(Node):
             messages.Vector3Stamped, 'tip/deflection', 10)
         self._pub_position = self.create_publisher(messages.PointStamped, 'tip/position', 10)
         self._pub_frequencies = self.create_publisher(Float64MultiArray, 'frequencies', 10)
+        self._pub_estimate = self.create_publisher(
+            Float64MultiArray, 'frequencies/estimate', 10)
+        self._estimator = self._make_estimator(self.settings)
         self._pub_markers = self.create_publisher(messages.MarkerArray, 'markers', 10)
         self._pub_diagnostics = self.create_publisher(
             messages.DiagnosticArray, '/diagnostics', 10)
@@ -183,8 +190,19 @@ class SimulatorNode(Node):
         self.get_logger().info(f'parameters changed: {changed}')
         return SetParametersResult(successful=True)
 
+    @staticmethod
+    def _make_estimator(settings) -> WhirlEstimator | None:
+        """Whirl-frequency estimator over the published motion (None: estimates off)."""
+        if not settings.estimate_window:
+            return None
+        return WhirlEstimator(settings.estimate_window, settings.publish_period,
+                              1.0 / settings.estimate_rate)
+
     def _apply_settings(self, settings) -> None:
         old, self.settings = self.settings, settings
+        if (settings.estimate_window, settings.estimate_rate, settings.publish_rate) != (
+                old.estimate_window, old.estimate_rate, old.publish_rate):
+            self._estimator = self._make_estimator(settings)
         if settings.real_time_factor != old.real_time_factor:
             self._restart_clock()
         self._countdown = min(self._countdown, self._publish_steps)
@@ -259,6 +277,8 @@ class SimulatorNode(Node):
             was_halted = self.engine.halted
             self.engine.reset()
             self._trail.clear()
+            if self._estimator is not None:
+                self._estimator.reset()
             self._countdown = 0
             self._restart_clock()
             t = self.engine.time
@@ -378,6 +398,11 @@ class SimulatorNode(Node):
         self._pub_frequencies.publish(messages.frequencies(*s.frequencies))
         if settings.publishes_clock:
             self._pub_clock.publish(messages.clock(s.stamp))
+        estimator = self._estimator
+        if estimator is not None:
+            estimate = estimator.push(s.time, st.u, st.v)
+            if estimate is not None:
+                self._pub_estimate.publish(messages.frequencies(estimate.f1, estimate.f2))
         if s.markers:
             scale = settings.marker_deflection_scale
             rod = rod_centerline(config.params, st.u, st.v, st.theta, scale=scale)

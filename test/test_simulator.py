@@ -320,3 +320,26 @@ def test_table1_params_file_loads_and_bad_files_are_refused(ros_processes, tmp_p
             'simulator', '--ros-args', '-r', f'__ns:={ns}_bad', '--params-file', str(bad))
         assert proc.wait(timeout=30) == 2
         assert 'invalid configuration' in proc.output and reason in proc.output
+
+
+def test_frequency_estimate_from_the_motion_matches_eq28_and_is_nan_at_rest(
+        ros_processes, ros_node, request):
+    ns = namespace(request)
+    start_simulator(ros_processes, ns, real_time_factor=FAST, deflection_limit=0.005,
+                    estimate_window=1.0, estimate_rate=5.0)
+    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+    estimate = ros_node.subscribe(f'{ns}/frequencies/estimate', Float64MultiArray, qos=1000)
+    ros_node.spin_until(lambda: len(estimate) >= 3, 30, 'estimates at rest')
+    assert all(math.isnan(f) for m in estimate for f in m.data)   # no motion: no estimate
+    assert estimate[-1].layout.dim[0].size == 2
+    omega_publisher(ros_node, ns).publish(Float64(data=2.0))
+    ros_node.spin_until(lambda: joint and joint[-1].velocity[0] == 2.0, 30, 'w = 2 rad/s')
+    t_reached = stamp(joint[-1])
+    n = len(estimate)
+    # a window that starts after the ramp has ended sees constant w: Eq. 28
+    ros_node.spin_until(lambda: stamp(joint[-1]) > t_reached + 3.0, 30, '3 s of hold')
+    late = [m.data for m in estimate[n + 8:]]        # 5 Hz: windows wholly in the hold
+    assert len(late) >= 3
+    for f1, f2 in late:
+        assert f1 == pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-3)
+        assert f2 == pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-3)
