@@ -394,6 +394,10 @@ def test_docs_tables_are_the_ones_the_commands_generate(reproduced, analyzed):
         assert len(documented) == len(new), name
         for d, g in zip(documented, new):
             assert_same_table(d, g, f'docs/figures/{name}')
+    readme = [t for t in tables((ROOT / 'README.md').read_text())
+              if tuple(t[0]) in by_header]
+    assert len(readme) == 1                                  # the fact table
+    assert_same_table(readme[0], by_header[tuple(readme[0][0])], 'README.md')
     facts = facts_by_where((DOCS / 'reproduce.md').read_text())
     assert len(facts) == len(facts_by_where((reproduced[0] / 'report.md').read_text()))
 
