@@ -323,7 +323,11 @@ class SimulationEngine:
         """Angular-velocity setpoint (rad/s) from time ``at`` (s) on; velocity drive."""
         w = self._check_command('omega setpoint', setpoint, 'velocity',
                                 self.config.max_omega, 'rad/s')
-        self._shaper.command(w, self._command_time(at))
+        t = self._command_time(at)
+        try:
+            self._shaper.command(w, t)
+        except ValueError as exc:       # beyond what the shaper can represent
+            self._reject(str(exc))
 
     def command_torque(self, torque, at=None) -> None:
         """Hub torque (N m) from time ``at`` (s) on; torque drive."""
