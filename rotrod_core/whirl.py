@@ -54,6 +54,7 @@ windows, but the others can be off by several per cent (measured in the bench).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -515,6 +516,34 @@ def _whirls(fit, data, cfg, window):
 def _estimate(t, z, cfg: WhirlSettings, start=None):
     """The estimate of one window, and the poles (1/s) of its whirls.
 
+    The model is linear in z: the fit runs on z scaled by a power of two (exact) to
+    a largest component in [1, 2), so that squares neither overflow (|z| ~ 1e300)
+    nor underflow (|z| ~ 1e-300); amplitudes, offset and noise are scaled back.
+    """
+    if len(z) == 0:
+        return _estimate_unit(t, z, cfg, start)
+    largest = float(max(np.max(np.abs(z.real)), np.max(np.abs(z.imag))))
+    if largest == 0:
+        return _estimate_unit(t, z, cfg, start)
+    e = math.frexp(largest)[1] - 1
+    unit = np.empty_like(z)
+    unit.real, unit.imag = np.ldexp(z.real, -e), np.ldexp(z.imag, -e)
+    est, poles = _estimate_unit(t, unit, cfg, start)
+
+    def back(x):
+        with np.errstate(over='ignore'):
+            return float(np.ldexp(x, e))
+    est = dataclasses.replace(
+        est, offset=complex(back(est.offset.real), back(est.offset.imag)),
+        noise_rms=back(est.noise_rms),
+        forward=dataclasses.replace(est.forward, amplitude=back(est.forward.amplitude)),
+        backward=dataclasses.replace(est.backward, amplitude=back(est.backward.amplitude)))
+    return est, poles
+
+
+def _estimate_unit(t, z, cfg: WhirlSettings, start=None):
+    """:func:`_estimate` on data of order 1.
+
     The poles include whirls rejected for decay or uncertainty: they are the start
     values for the next window. ``start``: poles to start from (else searched).
     """
@@ -527,7 +556,8 @@ def _estimate(t, z, cfg: WhirlSettings, start=None):
         return _no_estimate(f'gap of {gap:.3g} s between samples (> {cfg.max_gap:g} of the '
                             f'{span:.3g} s window)', samples=n, window=span)
     dt = float(np.median(np.diff(t)))
-    per_block = max(1, int(math.floor(cfg.block_interval / dt + 1e-6)))
+    # (a subnormal dt makes the ratio inf: more samples per block than there are)
+    per_block = max(1, int(math.floor(min(cfg.block_interval / dt, n + 1.0) + 1e-6)))
     if n // per_block < cfg.min_blocks:
         return _no_estimate(f'window too short: {n} samples make {n // per_block} blocks of '
                             f'{per_block}, {cfg.min_blocks} needed', samples=n, window=span)
