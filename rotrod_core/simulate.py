@@ -34,13 +34,17 @@ _GAUSS = math.sqrt(3.0) / 6.0
 def time_grid(t_end, dt) -> np.ndarray:
     """Sample times 0, dt, 2 dt, ..., ending exactly at ``t_end`` (last step may be short)."""
     for name, value in (('t_end', t_end), ('dt', dt)):
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                             np.floating)):
             raise ValueError(f'{name} must be a number, got {value!r}')
         if not math.isfinite(value) or value <= 0:
             raise ValueError(f'{name} must be a finite number > 0, got {value!r}')
     if dt > t_end:
         raise ValueError(f'dt ({dt} s) must not exceed t_end ({t_end} s)')
-    n = math.ceil(t_end / dt - 1e-9)
+    steps = t_end / dt - 1e-9
+    if steps > MAX_STEPS:       # also inf (1e300 / 1e-300), which math.ceil refuses
+        raise ValueError(f't_end/dt = {steps:.4g} steps exceeds the limit of {MAX_STEPS}')
+    n = math.ceil(steps)
     if n > MAX_STEPS:
         raise ValueError(f't_end/dt = {n} steps exceeds the limit of {MAX_STEPS}')
     t = np.arange(n + 1, dtype=float) * dt
