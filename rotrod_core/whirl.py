@@ -72,6 +72,7 @@ _MAX_ITERATIONS = 30
 _START_ITERATIONS = 4       # for the first whirl alone: a start value, the other unmodelled
 _DRIFT_SIGNIFICANCE = 25.0  # (|c| / std c)^2 above which a drift term is kept
 _ZERO_PAD = 8               # periodogram length: this many times the number of blocks
+MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (1e4 took 1.2 GB)
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,9 @@ class WhirlSettings:
                                            positive=True))
         set_(self, 'detection_db', finite_number('WhirlSettings.detection_db',
                                                  self.detection_db))
+        if not math.isfinite(self.block_interval):
+            raise ValueError(f'WhirlSettings.max_frequency {self.max_frequency!r} Hz is too '
+                             'small: the block interval 1 / (4 max_frequency) overflows')
 
     @property
     def block_interval(self) -> float:
@@ -655,14 +659,19 @@ class WhirlEstimator:
         if self.sample_interval >= self.window:
             raise ValueError(f'WhirlEstimator.sample_interval ({sample_interval} s) must be '
                              f'shorter than the window ({window} s)')
+        if not self.window / self.sample_interval <= MAX_WINDOW_SAMPLES:
+            raise ValueError(f'WhirlEstimator.window / sample_interval = '
+                             f'{self.window / self.sample_interval:.3g} samples; at most '
+                             f'{MAX_WINDOW_SAMPLES:g} (its buffer and tables grow with it)')
         self.settings = settings or WhirlSettings()
         capacity = 2 * int(math.ceil(self.window / self.sample_interval)) + 16
         self._t = np.empty(capacity)
         self._z = np.empty(capacity, dtype=complex)
         # the start-value tables for the expected window, now rather than in an update
-        per_block = max(1, int(math.floor(self.settings.block_interval / self.sample_interval
-                                          + 1e-6)))
-        blocks = int(round(self.window / self.sample_interval)) // per_block
+        samples = int(round(self.window / self.sample_interval))
+        per_block = max(1, int(math.floor(min(self.settings.block_interval
+                                              / self.sample_interval, samples + 1.0) + 1e-6)))
+        blocks = samples // per_block
         if blocks >= self.settings.min_blocks:
             _deflation(blocks, self.settings.drift_degree)
         self.reset()
