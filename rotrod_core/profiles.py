@@ -182,6 +182,7 @@ class Eq26Profile(Profile):
 
     def with_peak(self, omega_peak: float) -> Eq26Profile:
         """Same timing, peak |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
@@ -226,6 +227,7 @@ class ConstantProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> ConstantProfile:
         """Constant |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return ConstantProfile(_rescaled(self.omega_value, omega_peak))
 
 
@@ -290,6 +292,7 @@ class StepProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> StepProfile:
         """Both levels scaled by omega_peak / peak."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             return dataclasses.replace(self, omega_after=omega_peak)
         scale = omega_peak / self.peak
@@ -358,6 +361,7 @@ class RampProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> RampProfile:
         """Same timing, final |w| ``omega_peak`` (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
@@ -466,6 +470,7 @@ class SineSweepProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> SineSweepProfile:
         """Offset and amplitude scaled together so that |offset| + |amplitude| = omega_peak."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             raise ValueError('SineSweepProfile.with_peak: a zero sweep has no shape to scale')
         scale = omega_peak / self.peak
@@ -557,6 +562,7 @@ class TableProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> TableProfile:
         """Omegas scaled so the largest |w| is ``omega_peak``."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             raise ValueError('TableProfile.with_peak: an all-zero table has no shape to scale')
         return TableProfile(self.times, self.omegas * (omega_peak / self.peak))
