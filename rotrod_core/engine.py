@@ -149,6 +149,11 @@ class EngineConfig:
         if r > self.deflection_limit:
             raise ValueError(f'initial deflection {r:g} m exceeds deflection_limit '
                              f'{self.deflection_limit:g} m')
+        co = model.Coefficients.from_params(self.params)
+        if not (math.isfinite(model.energy(co, state))
+                and math.isfinite(model.angular_momentum(co, state))):
+            raise ValueError(f'the energy or angular momentum of the initial state {state} '
+                             'overflows')
 
     @property
     def dt(self) -> float:
