@@ -26,7 +26,7 @@ def _omega_array(omega, name='omega'):
         raise ValueError(f'{name} must be a number, got {omega!r}')
     try:
         w = np.asarray(omega, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'{name} must be a number or an array of numbers') from None
     if not np.all(np.isfinite(w)):
         raise ValueError(f'{name} must be finite, got {omega!r}')
@@ -248,9 +248,11 @@ def tangential_bending(params: RodParams, omega_dot):
 
     From Eq. 17 with v'' = v' = 0 and w small: k2 v = -m w' r0, so
     |v| = |w'| r0 m / k2 for an angular acceleration ``omega_dot`` (rad/s^2). A sudden
-    w' overshoots to twice this. Vectorized.
+    w' overshoots to twice this. Vectorized. +inf where the product overflows (beyond
+    any deflection limit).
     """
     wd = np.abs(_omega_array(omega_dot, 'omega_dot'))
-    v = wd * params.eccentricity * params.mass / params.stiffness_tangential
+    with np.errstate(over='ignore'):
+        v = wd * params.eccentricity * params.mass / params.stiffness_tangential
     v = np.asarray(v, dtype=float)
     return float(v) if v.ndim == 0 else v

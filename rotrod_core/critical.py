@@ -28,7 +28,7 @@ def _limit(deflection_limit):
         raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}')
     try:
         d = np.asarray(deflection_limit, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}') from None
     if not np.all(np.isfinite(d) & (d > 0)):
         raise ValueError(f'deflection_limit must be finite and > 0 m, got {deflection_limit!r}')

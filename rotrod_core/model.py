@@ -70,7 +70,7 @@ def make_state(initial: dict | None = None, *, scalar: bool = False, **defaults)
             continue
         try:
             arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ValueError(f'initial {name} must be a number, got {value!r}') from None
         if not np.all(np.isfinite(arr)):
             raise ValueError(f'initial {name} must be finite, got {value!r}')

@@ -52,7 +52,7 @@ def _check(name: str, value: Any, *, positive: bool = False, nonnegative: bool =
         raise ValueError(f'RodParams.{name} must be a number, got {value!r}')
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'RodParams.{name} must be a number, got {value!r}') from None
     if arr.size == 0:
         raise ValueError(f'RodParams.{name} is empty')

@@ -45,7 +45,7 @@ def _times(where: str, t):
         return finite_number(f'{where}: time t', t)
     try:
         tt = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'{where}: time t must be numbers, got {t!r}') from None
     if not np.all(np.isfinite(tt)):
         i = int(np.argmax(~np.isfinite(tt.ravel())))
@@ -493,7 +493,7 @@ class TableProfile(Profile):
         try:
             t = np.asarray(times, dtype=float).ravel()
             w = np.asarray(omegas, dtype=float).ravel()
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ValueError('TableProfile: times and omegas must be numbers') from None
         if t.size < 2 or t.size != w.size:
             raise ValueError(f'TableProfile needs >= 2 (time, omega) pairs of equal length, '

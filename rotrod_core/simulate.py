@@ -37,7 +37,11 @@ def time_grid(t_end, dt) -> np.ndarray:
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
                                                              np.floating)):
             raise ValueError(f'{name} must be a number, got {value!r}')
-        if not math.isfinite(value) or value <= 0:
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:           # an int beyond the float range
+            finite = False
+        if not finite or value <= 0:
             raise ValueError(f'{name} must be a finite number > 0, got {value!r}')
     if dt > t_end:
         raise ValueError(f'dt ({dt} s) must not exceed t_end ({t_end} s)')
@@ -128,7 +132,12 @@ def _velocity_drive(params, co, profile, t, coupling, initial):
 def _torque_function(torque) -> Callable[[float], float]:
     if callable(torque):
         def q(t):
-            value = float(torque(t))
+            returned = torque(t)
+            try:
+                value = float(returned)
+            except (TypeError, ValueError, OverflowError):
+                raise ValueError(f'torque({t}) returned {returned!r}; torque must be a '
+                                 'finite number') from None
             if not math.isfinite(value):
                 raise ValueError(f'torque({t}) returned {value!r}; torque must be finite')
             return value
@@ -137,7 +146,7 @@ def _torque_function(torque) -> Callable[[float], float]:
         raise ValueError(f'torque must be a number or a function of time, got {torque!r}')
     try:
         value = float(torque)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(
             f'torque must be a number or a function of time, got {torque!r}') from None
     if not math.isfinite(value):

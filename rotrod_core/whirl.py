@@ -201,7 +201,7 @@ def _samples(t, u, v):
     """Validated float arrays ``t`` (s) and ``z = u + i v`` (m); ValueError if unusable."""
     try:
         arrays = [np.asarray(x, dtype=float).ravel() for x in (t, u, v)]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError('t, u and v must be arrays of numbers') from None
     t, u, v = arrays
     if not len(t) == len(u) == len(v):
