@@ -68,8 +68,9 @@ HUGE = 1.7976931348623157e308   # the largest float
 EXTREME_FLOATS = st.sampled_from([0.0, -0.0, -1.0, TINY, -TINY, 2.2e-308, 1e-300, 1e-150,
                                   1e150, 1e300, HUGE, -1e300, -HUGE,
                                   math.nan, math.inf, -math.inf])
-WRONG_TYPES = st.sampled_from(['1 kg', 'fast', None, True, False])
-"""Wrong types. (A numeric string such as '1.0' is a number by design: float('1.0').)"""
+WRONG_TYPES = st.sampled_from(['1 kg', 'fast', None, True, False, 10**400, -10**400])
+"""Wrong types, and ints beyond the float range (float() raises OverflowError). (A
+numeric string such as '1.0' is a number by design: float('1.0').)"""
 CONTAINERS = st.sampled_from([[], (1.0, 2.0), {}])
 NON_FINITE = st.sampled_from([math.nan, math.inf, -math.inf])
 
@@ -88,7 +89,25 @@ def is_number(x) -> bool:
     """True for a finite float or int (not a bool): what finite_number accepts, but
     numeric strings."""
     return (isinstance(x, (int, float)) and not isinstance(x, bool)
-            and math.isfinite(x))
+            and abs(x) <= HUGE and math.isfinite(x))
+
+
+def test_regression_ints_beyond_the_float_range_are_a_value_error():
+    # float(10**400) raises OverflowError, which the validators let through
+    big = 10**400
+    calls = (lambda: RodParams(mass=big), lambda: Eq26Profile(period=big),
+             lambda: Eq26Profile().omega(big), lambda: Eq26Profile().omega([0.0, big]),
+             lambda: TableProfile([0, big], [0, 1]), lambda: time_grid(big, 1e-3),
+             lambda: dynamic_frequencies(RodParams(), big),
+             lambda: critical_speed(RodParams(), big),
+             lambda: RealTimeStepper(RodParams()).step_velocity(big),
+             lambda: RealTimeStepper(RodParams(), initial={'u': big}),
+             lambda: estimate_whirl([0, 1, big], [0, 0, 0], [0, 0, 0]),
+             lambda: simulate(RodParams(), torque=big, t_end=0.01),
+             lambda: simulate(RodParams(), torque=lambda t: big, t_end=0.01))
+    for call in calls:
+        with pytest.raises(ValueError):
+            call()
 
 
 # -- RodParams ------------------------------------------------------------------------
