@@ -25,7 +25,12 @@ from .command import OmegaSetpointShaper
 from .critical import critical_speed
 from .model import STATE_FIELDS, State, make_state
 from .params import RodParams
-from .stepper import NonFiniteStateError, RealTimeStepper, check_coupling
+from .stepper import (
+    NonFiniteStateError,
+    RealTimeStepper,
+    check_coupling,
+    check_rotary_inertia,
+)
 
 DRIVES = ('velocity', 'torque')
 
@@ -135,13 +140,8 @@ class EngineConfig:
                              f'{self.initial!r}') from None
         state = make_state(initial, scalar=True)
         set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
-        x = float(self.params.eccentricity) + state.u
-        if (self.drive == 'torque' and self.coupling == 'paper'
-                and not self.params.hub_inertia + self.params.mass * (x * x + state.v * state.v)
-                > 0):
-            raise ValueError('torque drive with the paper coupling needs rotary inertia: '
-                             'hub_inertia > 0, or the mass off the axis (eccentricity > 0 or '
-                             'an initial deflection)')
+        if self.drive == 'torque':
+            check_rotary_inertia(self.params, self.coupling, state)
         if abs(state.omega) > self.max_omega:
             raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
                              f'{self.max_omega:g} rad/s')

@@ -25,6 +25,20 @@ def check_coupling(params: RodParams, coupling: str) -> None:
                          'determinant m^2 J); use a disk inertia or coupling="paper"')
 
 
+def check_rotary_inertia(params: RodParams, coupling: str, state: State) -> None:
+    """Raise ValueError if the torque drive has no rotary inertia at ``state``.
+
+    With the paper's coupling and J = 0 the inertia is m rho^2, zero with the mass on
+    the axis: w' is undefined there.
+    """
+    x = float(params.eccentricity) + state.u
+    if coupling == 'paper' and not params.hub_inertia + params.mass * (
+            x * x + state.v * state.v) > 0:
+        raise ValueError('torque drive with the paper coupling needs rotary inertia: '
+                         'hub_inertia > 0, or the mass off the axis (eccentricity > 0 or '
+                         'an initial deflection)')
+
+
 class RealTimeStepper:
     """Classical RK4 at a fixed step ``dt`` under the current command.
 
