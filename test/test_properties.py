@@ -998,6 +998,32 @@ def test_regression_time_grid_whose_step_count_overflows():
         simulate(RodParams(), Eq26Profile(), 1e300, dt=1e-300)
 
 
+@props(60)
+@given(rod_fields(sane_only=True, ranges=LAB), st.sampled_from(['exact', 'paper']),
+       anything(st.floats(-1.0, 1.0)),
+       st.dictionaries(st.sampled_from(['u', 'v', 'du', 'dv', 'theta', 'omega']),
+                       anything(st.floats(-1e-3, 1e-3)), max_size=2))
+def test_offline_torque_runs_are_finite_or_a_clear_error(fields, coupling, torque, initial):
+    """simulate(torque=Q, initial=...): ValueError for bad input (incl. no rotary
+    inertia), NonFiniteStateError for a run that overflows, else finite histories."""
+    params = RodParams(**fields)
+    try:
+        run = simulate(params, torque=torque, t_end=0.05, dt=1e-3, coupling=coupling,
+                       initial=initial)
+    except ValueError as exc:
+        event('refused')
+        assert str(exc)
+        return
+    except NonFiniteStateError as exc:
+        event('overflow')
+        assert 'non-finite' in str(exc)
+        return
+    event('finite')
+    assert is_number(torque) and all(is_number(x) for x in initial.values())
+    for name in ('u', 'v', 'du', 'dv', 'theta', 'omega', 'omega_dot', 'torque', 'x', 'y'):
+        assert finite(getattr(run, name)), name
+
+
 @props(30)
 @given(rod_fields(sane_only=True), profiles(sane_only=True))
 def test_short_offline_runs_are_finite_or_refused(fields, spec):
