@@ -22,9 +22,11 @@ TWO_PI = 2.0 * math.pi
 
 
 def _omega_array(omega, name='omega'):
+    if isinstance(omega, bool):
+        raise ValueError(f'{name} must be a number, got {omega!r}')
     try:
         w = np.asarray(omega, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'{name} must be a number or an array of numbers') from None
     if not np.all(np.isfinite(w)):
         raise ValueError(f'{name} must be finite, got {omega!r}')
@@ -109,7 +111,12 @@ def modal_analysis(params: RodParams, omega: float) -> ModalAnalysis:
     if params.is_batch:
         raise ValueError('modal_analysis takes one system, not a batch')
     w = float(_omega_array(omega))
-    lam, vec = np.linalg.eig(state_matrix(params, w))
+    with np.errstate(over='ignore', invalid='ignore'):
+        a = state_matrix(params, w)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f'omega = {w!r} rad/s is too large for the eigen analysis: its '
+                         'state matrix overflows (w^2)')
+    lam, vec = np.linalg.eig(a)
     modes = []
     used = np.zeros(4, dtype=bool)
     for i in np.argsort(-lam.imag):
@@ -222,11 +229,13 @@ def static_deflection(params: RodParams, omega):
     w^2 = k1/m; negative above it (an equilibrium that is not reached from rest).
     Vectorized over ``omega`` and batch parameters.
     """
-    w2 = _omega_array(omega) ** 2
+    w = _omega_array(omega)
     k1, m, r0 = params.stiffness_radial, params.mass, params.eccentricity
-    denom = k1 - m * w2
-    with np.errstate(divide='ignore', invalid='ignore'):
-        u = np.where(denom == 0, np.inf, m * w2 * r0 / np.where(denom == 0, 1.0, denom))
+    # u_s = r0 / (k1 / (m w^2) - 1): finite where m w^2 overflows (u_s -> -r0) or
+    # underflows (u_s -> 0), where the quotient of the two overflowed was NaN
+    with np.errstate(divide='ignore', over='ignore', invalid='ignore'):
+        q = k1 / (m * (w * w)) - 1.0
+        u = np.where(q == 0, np.inf, r0 / np.where(q == 0, 1.0, q))
     u = u + 0.0 * np.asarray(r0)
     v = np.zeros_like(u)
     if u.ndim == 0:
@@ -239,9 +248,11 @@ def tangential_bending(params: RodParams, omega_dot):
 
     From Eq. 17 with v'' = v' = 0 and w small: k2 v = -m w' r0, so
     |v| = |w'| r0 m / k2 for an angular acceleration ``omega_dot`` (rad/s^2). A sudden
-    w' overshoots to twice this. Vectorized.
+    w' overshoots to twice this. Vectorized. +inf where the product overflows (beyond
+    any deflection limit).
     """
     wd = np.abs(_omega_array(omega_dot, 'omega_dot'))
-    v = wd * params.eccentricity * params.mass / params.stiffness_tangential
+    with np.errstate(over='ignore'):
+        v = wd * params.eccentricity * params.mass / params.stiffness_tangential
     v = np.asarray(v, dtype=float)
     return float(v) if v.ndim == 0 else v

@@ -16,6 +16,8 @@ def finite_number(name: str, value, *, positive: bool = False,
         raise ValueError(f'{name} must be a number, got {value!r}')
     try:
         x = float(value)
+    except OverflowError:           # an int beyond the float range
+        raise ValueError(f'{name} must be finite, got {value!r}') from None
     except (TypeError, ValueError):
         raise ValueError(f'{name} must be a number, got {value!r}') from None
     if not math.isfinite(x):

@@ -37,6 +37,31 @@ from .checks import finite_number
 MIN_STREAM = 10
 """Arrivals after which a stream is established: its slope is extrapolated when late."""
 
+MAX_PATH_SEGMENTS = 1000
+"""Most segments of an extrapolated path (one per interval, fewer for a fast stream)."""
+
+MAX_OMEGA = 1e300
+"""Largest |w| accepted as a setpoint or initial speed, rad/s: w and its differences
+stay finite (a bound for float range, not a physical one)."""
+
+
+def _within_limit(times: list, omegas: list, limit: float) -> None:
+    """Delay knots by float rounding steps where a segment's slope exceeds ``limit``.
+
+    The knots are placed so that every slope is within the limit, but at large times
+    the rounding of t + d - t (d a duration) can exceed it by parts in 1e9.
+    """
+    dt, dw = np.diff(times), np.abs(np.diff(omegas))
+    with np.errstate(all='ignore'):
+        if np.all((dw == 0) | ((dt > 0) & (dw / dt <= limit))):
+            return                      # the usual case, checked at numpy speed
+    for i in range(1, len(times)):
+        if not math.isfinite(times[i - 1]):
+            break
+        dw = abs(omegas[i] - omegas[i - 1])
+        while dw and (times[i] <= times[i - 1] or dw / (times[i] - times[i - 1]) > limit):
+            times[i] = math.nextafter(times[i], math.inf)
+
 
 @dataclass(frozen=True)
 class Ramp:
@@ -70,7 +95,7 @@ class Ramp:
         if i == len(self.times) - 1:
             return self.omegas[-1]
         t0, t1, w0, w1 = self.times[i], self.times[i + 1], self.omegas[i], self.omegas[i + 1]
-        return w0 + (w1 - w0) * (t - t0) / (t1 - t0)
+        return w0 + (w1 - w0) * ((t - t0) / (t1 - t0))
 
     def omega_dot(self, t: float) -> float:
         """Angular acceleration just after time ``t`` >= start, rad/s^2."""
@@ -79,6 +104,14 @@ class Ramp:
             return 0.0
         t0, t1, w0, w1 = self.times[i], self.times[i + 1], self.omegas[i], self.omegas[i + 1]
         return (w1 - w0) / (t1 - t0)
+
+
+def _omega(name: str, value) -> float:
+    """A finite angular velocity within +-MAX_OMEGA, rad/s; else ValueError."""
+    w = finite_number(name, value)
+    if not abs(w) <= MAX_OMEGA:
+        raise ValueError(f'{name} must be within +-{MAX_OMEGA:g} rad/s, got {value!r}')
+    return w
 
 
 class LowerEnvelope:
@@ -191,6 +224,9 @@ class OmegaSetpointShaper:
                 <= self.max_stall):
             raise ValueError('need min_interval <= nominal_interval <= max_interval '
                              '<= max_stall')
+        if not self.max_angular_acceleration * self.max_stall <= MAX_OMEGA:
+            raise ValueError(f'max_angular_acceleration x max_stall (the largest change of w '
+                             f'during a stall) must be <= {MAX_OMEGA:g} rad/s')
         if isinstance(window, bool) or not isinstance(window, int) or window < 2:
             raise ValueError(f'window must be an integer >= 2, got {window!r}')
         self.window = window
@@ -200,7 +236,7 @@ class OmegaSetpointShaper:
 
     def reset(self, omega: float = 0.0, time: float = 0.0) -> None:
         """Hold ``omega`` (rad/s) from ``time`` (s) on; forget the stream."""
-        w, t = finite_number('omega', omega), finite_number('time', time)
+        w, t = _omega('omega', omega), finite_number('time', time)
         self._ramps = [Ramp((t, t), (w, w))]
         self._starts = [t]
         self._last_arrival = None
@@ -215,10 +251,12 @@ class OmegaSetpointShaper:
 
     def omega(self, t: float) -> float:
         """Shaped angular velocity at time ``t`` (s), rad/s."""
+        t = finite_number('time', t)
         return self._ramp_at(t).omega(t)
 
     def omega_dot(self, t: float) -> float:
         """Shaped angular acceleration just after time ``t`` (s), rad/s^2."""
+        t = finite_number('time', t)
         return self._ramp_at(t).omega_dot(t)
 
     @property
@@ -261,7 +299,7 @@ class OmegaSetpointShaper:
         the ramp starts at the arrival and reaches, one interval later, the stream's
         extrapolation.
         """
-        w_set, t = finite_number('setpoint', setpoint), finite_number('time', time)
+        w_set, t = _omega('setpoint', setpoint), finite_number('time', time)
         if self._last_arrival is not None and t < self._last_arrival:
             raise ValueError(f'setpoint time {t} s precedes the previous one '
                              f'({self._last_arrival} s)')
@@ -299,6 +337,7 @@ class OmegaSetpointShaper:
             omegas += list(path[1][after])
             times.append(times[-1] + max(self.delay, abs(omegas[-1] - w_set) / limit))
             omegas.append(w_set)
+        _within_limit(times, omegas, limit)
         ramp = Ramp(tuple(times), tuple(omegas))
         self._ramps.append(ramp)
         self._starts.append(start)
@@ -312,9 +351,14 @@ class OmegaSetpointShaper:
         curvature from the last three setpoints), bounded by the acceleration limit.
         """
         (d0, w0), (d1, w1), (d2, w2) = self._recent
-        slope = (w2 - w1) / (d2 - d1)
-        curvature = (slope - (w1 - w0) / (d1 - d0)) / (0.5 * (d2 - d0))
-        n = max(1, math.ceil(self.max_stall / self.interval))
+        if d0 < d1 < d2:
+            slope = (w2 - w1) / (d2 - d1)
+            curvature = (slope - (w1 - w0) / (d1 - d0)) / (0.5 * (d2 - d0))
+        else:           # due times equal to rounding (intervals below the time's ulp)
+            slope = curvature = math.nan
+        if not (math.isfinite(slope) and math.isfinite(curvature)):
+            slope = curvature = 0.0     # no usable trend: hold the latest setpoint
+        n = max(1, min(math.ceil(self.max_stall / self.interval), MAX_PATH_SEGMENTS))
         h = self.max_stall / n
         tau = h * np.arange(n + 1)
         limit = self.max_angular_acceleration

@@ -24,9 +24,11 @@ STARTS = ('quasi_static', 'step', 'impulsive')
 
 
 def _limit(deflection_limit):
+    if isinstance(deflection_limit, bool):
+        raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}')
     try:
         d = np.asarray(deflection_limit, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}') from None
     if not np.all(np.isfinite(d) & (d > 0)):
         raise ValueError(f'deflection_limit must be finite and > 0 m, got {deflection_limit!r}')
@@ -44,12 +46,16 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
     if start not in STARTS:
         raise ValueError(f'start must be one of {STARTS}, got {start!r}')
     r0 = np.asarray(params.eccentricity, dtype=float)
-    if start == 'quasi_static':
-        w0 = params.natural_frequency_radial
-        w = w0 * np.sqrt(d / (d + r0))
-    else:
-        w0 = params.natural_frequency
-        w = w0 * np.sqrt(d / (d + 2 * r0)) if start == 'step' else w0 * d / (r0 + d)
+    # d / (d + r0) as 1 / (1 + r0/d): d + r0 may overflow, r0/d = inf gives the limit 0
+    with np.errstate(over='ignore'):
+        ratio = r0 / d
+        if start == 'quasi_static':
+            w0 = params.natural_frequency_radial
+            w = w0 * np.sqrt(1.0 / (1.0 + ratio))
+        else:
+            w0 = params.natural_frequency
+            w = (w0 * np.sqrt(1.0 / (1.0 + 2 * ratio)) if start == 'step'
+                 else w0 / (1.0 + ratio))
     w = np.asarray(w, dtype=float)
     return float(w) if w.ndim == 0 else w
 

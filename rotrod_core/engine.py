@@ -16,6 +16,8 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from . import model
 from .analysis import dynamic_frequencies, modal_analysis, tangential_bending
 from .checks import finite_number
@@ -23,7 +25,12 @@ from .command import OmegaSetpointShaper
 from .critical import critical_speed
 from .model import STATE_FIELDS, State, make_state
 from .params import RodParams
-from .stepper import NonFiniteStateError, RealTimeStepper, check_coupling
+from .stepper import (
+    NonFiniteStateError,
+    RealTimeStepper,
+    check_coupling,
+    check_rotary_inertia,
+)
 
 DRIVES = ('velocity', 'torque')
 
@@ -126,9 +133,15 @@ class EngineConfig:
                 f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 m / k2), beyond '
                 f'the {self.deflection_limit * 1e3:.3g} mm deflection_limit: every ramp at '
                 'that rate would halt the simulation')
-        initial = dict(self.initial)
-        state = make_state(initial)
+        try:
+            initial = dict(self.initial)
+        except (TypeError, ValueError):
+            raise ValueError(f'initial must be (name, value) pairs or a dict, got '
+                             f'{self.initial!r}') from None
+        state = make_state(initial, scalar=True)
         set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
+        if self.drive == 'torque':
+            check_rotary_inertia(self.params, self.coupling, state)
         if abs(state.omega) > self.max_omega:
             raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
                              f'{self.max_omega:g} rad/s')
@@ -136,6 +149,11 @@ class EngineConfig:
         if r > self.deflection_limit:
             raise ValueError(f'initial deflection {r:g} m exceeds deflection_limit '
                              f'{self.deflection_limit:g} m')
+        co = model.Coefficients.from_params(self.params)
+        if not (math.isfinite(model.energy(co, state))
+                and math.isfinite(model.angular_momentum(co, state))):
+            raise ValueError(f'the energy or angular momentum of the initial state {state} '
+                             'overflows')
 
     @property
     def dt(self) -> float:
@@ -145,7 +163,7 @@ class EngineConfig:
     @property
     def initial_state(self) -> State:
         """The initial state as a :class:`State`."""
-        return make_state(dict(self.initial))
+        return make_state(dict(self.initial), scalar=True)
 
     def replace(self, **changes) -> EngineConfig:
         """A validated copy with some fields changed; RodParams fields go to ``params``."""
@@ -282,7 +300,10 @@ class SimulationEngine:
 
     # ----------------------------------------------------------------- commands
     def _command_time(self, at) -> float:
-        t = self.time if at is None else finite_number('command time', at)
+        try:
+            t = self.time if at is None else finite_number('command time', at)
+        except ValueError as exc:
+            self._reject(str(exc))
         return max(t, self.time, self._shaper.last_command_time)
 
     def _reject(self, reason: str):
@@ -307,7 +328,11 @@ class SimulationEngine:
         """Angular-velocity setpoint (rad/s) from time ``at`` (s) on; velocity drive."""
         w = self._check_command('omega setpoint', setpoint, 'velocity',
                                 self.config.max_omega, 'rad/s')
-        self._shaper.command(w, self._command_time(at))
+        t = self._command_time(at)
+        try:
+            self._shaper.command(w, t)
+        except ValueError as exc:       # beyond what the shaper can represent
+            self._reject(str(exc))
 
     def command_torque(self, torque, at=None) -> None:
         """Hub torque (N m) from time ``at`` (s) on; torque drive."""
@@ -357,6 +382,8 @@ class SimulationEngine:
 
     def advance(self, steps: int) -> int:
         """Take up to ``steps`` steps (fewer if halted); return how many were taken."""
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)):
+            raise ValueError(f'steps must be a whole number, got {steps!r}')
         done = 0
         while done < steps and self.step():
             done += 1
@@ -364,7 +391,10 @@ class SimulationEngine:
 
     def steps_until(self, t: float) -> int:
         """Number of whole steps from :attr:`time` to reach time ``t`` (s), >= 0."""
-        return max(0, math.floor((t - self.time) / self.config.dt + 1e-9))
+        n = (finite_number('t', t) - self.time) / self.config.dt + 1e-9
+        if not math.isfinite(n):
+            raise ValueError(f't = {t!r} s is too many steps of {self.config.dt:g} s away')
+        return max(0, math.floor(n))
 
     def advance_to(self, t: float) -> int:
         """Take the whole steps that do not pass time ``t`` (s); return how many."""

@@ -26,6 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .checks import finite_number
 from .params import RodParams
 
 COUPLINGS = ('exact', 'paper')
@@ -51,10 +52,11 @@ class State(NamedTuple):
 STATE_FIELDS = State._fields
 
 
-def make_state(initial: dict | None = None, **defaults) -> State:
+def make_state(initial: dict | None = None, *, scalar: bool = False, **defaults) -> State:
     """Build a :class:`State` from a mapping of named initial values (others zero).
 
-    Raises ValueError for an unknown name or a non-finite value.
+    Values may be arrays (a batch) unless ``scalar``. Raises ValueError for an unknown
+    name or a value that is not a finite number (booleans and strings included).
     """
     values = dict.fromkeys(STATE_FIELDS, 0.0)
     values.update(defaults)
@@ -63,7 +65,13 @@ def make_state(initial: dict | None = None, **defaults) -> State:
             raise ValueError(f'unknown initial state {name!r}; expected one of {STATE_FIELDS}')
         values[name] = value
     for name, value in values.items():
-        arr = np.asarray(value, dtype=float)
+        if scalar or isinstance(value, bool):
+            values[name] = finite_number(f'initial {name}', value)
+            continue
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f'initial {name} must be a number, got {value!r}') from None
         if not np.all(np.isfinite(arr)):
             raise ValueError(f'initial {name} must be finite, got {value!r}')
         values[name] = float(arr) if arr.ndim == 0 else arr

@@ -52,7 +52,7 @@ def _check(name: str, value: Any, *, positive: bool = False, nonnegative: bool =
         raise ValueError(f'RodParams.{name} must be a number, got {value!r}')
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f'RodParams.{name} must be a number, got {value!r}') from None
     if arr.size == 0:
         raise ValueError(f'RodParams.{name} is empty')
@@ -125,6 +125,45 @@ class RodParams:
         except ValueError:
             shapes = {k: np.shape(v) for k, v in self._numeric().items() if np.shape(v)}
             raise ValueError(f'RodParams array fields do not broadcast: {shapes}') from None
+        self._check_derived()
+
+    def _check_derived(self):
+        """Refuse fields whose derived quantities overflow, vanish (underflow) or are NaN.
+
+        Each field may be finite and positive while d^4, 3 E I / l^3, k / m or
+        sqrt(k m) is not: such a rod has no usable stiffness or natural frequency.
+        """
+        section = (('rod_diameter',) if self.section == 'circular'
+                   else ('section_width', 'section_thickness'))
+        stiffness = ('youngs_modulus', *section, 'rod_length')
+        derived = (
+            ('second_moment_radial', section, True),
+            ('second_moment_tangential', section, True),
+            ('stiffness_radial', stiffness, True),
+            ('stiffness_tangential', stiffness, True),
+            ('natural_frequency_radial', ('mass', *stiffness), True),
+            ('natural_frequency_tangential', ('mass', *stiffness), True),
+            ('damping_radial', ('damping_ratio', 'mass', *stiffness), False),
+            ('damping_tangential', ('damping_ratio', 'mass', *stiffness), False),
+        )
+        with np.errstate(all='ignore'):
+            ratios = {'k1 / m': self.stiffness_radial / self.mass,
+                      'k2 / m': self.stiffness_tangential / self.mass}
+            values = {name: getattr(self, name) for name, _, _ in derived}
+        for name, fields, positive in derived:
+            value = np.asarray(values[name], dtype=float)
+            bad = ~np.isfinite(value) | ~((value > 0) if positive else (value >= 0))
+            if np.any(bad):
+                shown = value.flat[int(np.argmax(bad.ravel()))]
+                given = ', '.join(f'{f}={getattr(self, f)!r}' for f in fields)
+                raise ValueError(f'RodParams: {name} is {float(shown)!r}, not a finite number '
+                                 f'{"> 0" if positive else ">= 0"} (overflow or underflow '
+                                 f'of {given})')
+        for name, ratio in ratios.items():
+            if not np.all(np.isfinite(ratio) & (np.asarray(ratio) > 0)):
+                given = ', '.join(f'{f}={getattr(self, f)!r}' for f in ('mass', *stiffness))
+                raise ValueError(f'RodParams: {name} is not a finite number > 0 (overflow '
+                                 f'or underflow of {given})')
 
     def _numeric(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
@@ -154,14 +193,14 @@ class RodParams:
         """Second moment of area I1 for bending in the radial direction e1, m^4."""
         if self.section == 'circular':
             return math.pi * np.asarray(self.rod_diameter) ** 4 / 64.0 + 0.0
-        return self.section_thickness * self.section_width**3 / 12.0
+        return self.section_thickness * np.asarray(self.section_width, dtype=float) ** 3 / 12.0
 
     @property
     def second_moment_tangential(self):
         """Second moment of area I2 for bending in the tangential direction e2, m^4."""
         if self.section == 'circular':
             return self.second_moment_radial
-        return self.section_width * self.section_thickness**3 / 12.0
+        return self.section_width * np.asarray(self.section_thickness, dtype=float) ** 3 / 12.0
 
     @property
     def second_moment(self):
@@ -170,14 +209,19 @@ class RodParams:
         return self.second_moment_radial
 
     @property
+    def _length_cubed(self):
+        """l^3 in m^3 (numpy: inf on overflow, where a Python float raises)."""
+        return np.asarray(self.rod_length, dtype=float) ** 3
+
+    @property
     def stiffness_radial(self):
         """Tip stiffness k1 = 3 E I1 / l^3 in the radial direction, N/m."""
-        return 3.0 * self.youngs_modulus * self.second_moment_radial / self.rod_length**3
+        return 3.0 * self.youngs_modulus * self.second_moment_radial / self._length_cubed
 
     @property
     def stiffness_tangential(self):
         """Tip stiffness k2 = 3 E I2 / l^3 in the tangential direction, N/m."""
-        return 3.0 * self.youngs_modulus * self.second_moment_tangential / self.rod_length**3
+        return 3.0 * self.youngs_modulus * self.second_moment_tangential / self._length_cubed
 
     @property
     def stiffness(self):
@@ -204,12 +248,14 @@ class RodParams:
     @property
     def damping_radial(self):
         """Viscous damping coefficient c1 = 2 zeta sqrt(k1 m) on u', N s/m."""
-        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_radial * self.mass) + 0.0
+        # sqrt(k1) sqrt(m): k1 m may overflow where c1 does not (0 x inf: NaN)
+        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_radial) * np.sqrt(self.mass)
 
     @property
     def damping_tangential(self):
         """Viscous damping coefficient c2 = 2 zeta sqrt(k2 m) on v', N s/m."""
-        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_tangential * self.mass) + 0.0
+        return (2.0 * self.damping_ratio * np.sqrt(self.stiffness_tangential)
+                * np.sqrt(self.mass))
 
     def _require_isotropic(self, what: str):
         if not self.is_isotropic:

@@ -4,11 +4,16 @@ Each profile evaluates on floats and numpy arrays. ``angle(t)`` is the exact int
 of ``omega`` from 0 to t (rad). ``jumps()`` lists the instants at which omega jumps;
 integrators apply the physical jump there (the mass keeps its absolute
 velocity, see :func:`rotrod_core.model.omega_jump`).
+
+A time that is not a finite number is a ValueError. w and w' are finite at every
+finite time (construction refuses a profile whose slope or phase overflows); the
+angle grows without bound and is finite or a ValueError saying it overflows.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -32,6 +37,40 @@ def _rescaled(value: float, omega_peak: float) -> float:
 def _out(t, value):
     """Return a float for scalar time input, an array otherwise."""
     return float(value) if np.ndim(t) == 0 else value
+
+
+def _times(where: str, t):
+    """``t`` as a float (scalar) or a float array; ValueError unless all finite numbers."""
+    if np.ndim(t) == 0:
+        return finite_number(f'{where}: time t', t)
+    try:
+        tt = np.asarray(t, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f'{where}: time t must be numbers, got {t!r}') from None
+    if not np.all(np.isfinite(tt)):
+        i = int(np.argmax(~np.isfinite(tt.ravel())))
+        raise ValueError(f'{where}: time t must be finite, got t[{i}] = {tt.flat[i]!r}')
+    return tt
+
+
+def _evaluation(method):
+    """Validate the time of a profile's omega/omega_dot/angle and check its result."""
+    @functools.wraps(method)
+    def checked(self, t):
+        where = f'{type(self).__name__}.{method.__name__}'
+        tt = _times(where, t)
+        with np.errstate(all='ignore'):     # unselected branches of np.where may overflow
+            value = method(self, tt)
+        if not np.all(np.isfinite(value)):
+            raise ValueError(f'{where}: the result at t = {t!r} s overflows (not finite)')
+        return value
+    return checked
+
+
+def _require_finite(where: str, what: str, value: float) -> None:
+    """ValueError unless a quantity derived from a profile's fields is finite."""
+    if not math.isfinite(value):
+        raise ValueError(f'{where}: {what} overflows ({value!r})')
 
 
 class Profile:
@@ -89,6 +128,10 @@ class Eq26Profile(Profile):
                                                    positive=True))
         object.__setattr__(self, 'omega_max', _finite('Eq26Profile', 'omega_max',
                                                       self.omega_max))
+        T, W = self.period, self.omega_max
+        _require_finite('Eq26Profile.period', 'the joint 7T/3', 7.0 * T)
+        _require_finite('Eq26Profile.period', '2 pi / T', 2.0 * math.pi / T)
+        _require_finite('Eq26Profile.period', 'the peak acceleration 2W/T', 2.0 * W / T)
 
     def _stages(self, t):
         T = self.period
@@ -96,6 +139,7 @@ class Eq26Profile(Profile):
         s = t - 4.0 * T / 3.0
         return T, t, s, (t <= T), (t > T) & (t <= 4 * T / 3), (t > 4 * T / 3) & (t <= 7 * T / 3)
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity w(t), rad/s."""
         T, tt, s, up, hold, down = self._stages(t)
@@ -105,6 +149,7 @@ class Eq26Profile(Profile):
         w = np.where(down, W * (1.0 - s / T + np.sin(k * s) / (2 * math.pi)), w)
         return _out(t, np.where(tt < 0, 0.0, w))
 
+    @_evaluation
     def omega_dot(self, t):
         """Angular acceleration w'(t), rad/s^2."""
         T, tt, s, up, _, down = self._stages(t)
@@ -113,6 +158,7 @@ class Eq26Profile(Profile):
         a = np.where(down, W / T * (np.cos(k * s) - 1.0), a)
         return _out(t, a)
 
+    @_evaluation
     def angle(self, t):
         """Hub angle theta(t), rad (closed form)."""
         T, tt, s, up, hold, down = self._stages(t)
@@ -136,6 +182,7 @@ class Eq26Profile(Profile):
 
     def with_peak(self, omega_peak: float) -> Eq26Profile:
         """Same timing, peak |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
@@ -153,14 +200,17 @@ class ConstantProfile(Profile):
         object.__setattr__(self, 'omega_value',
                            _finite('ConstantProfile', 'omega', self.omega_value))
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity, rad/s."""
         return _out(t, np.full(np.shape(t), self.omega_value))
 
+    @_evaluation
     def omega_dot(self, t):
         """Zero, rad/s^2."""
         return _out(t, np.zeros(np.shape(t)))
 
+    @_evaluation
     def angle(self, t):
         """W t, rad."""
         return _out(t, self.omega_value * np.asarray(t, dtype=float))
@@ -177,6 +227,7 @@ class ConstantProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> ConstantProfile:
         """Constant |w| ``omega_peak`` rad/s (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return ConstantProfile(_rescaled(self.omega_value, omega_peak))
 
 
@@ -211,15 +262,18 @@ class StepProfile(Profile):
             return ((self.t_step, self.omega_before, self.omega_after),)
         return ()
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity, rad/s."""
         tt = np.asarray(t, dtype=float)
         return _out(t, np.where(tt < self.t_step, self.omega_before, self.omega_after))
 
+    @_evaluation
     def omega_dot(self, t):
         """Zero away from the step, rad/s^2."""
         return _out(t, np.zeros(np.shape(t)))
 
+    @_evaluation
     def angle(self, t):
         """Piecewise linear hub angle, rad."""
         tt = np.asarray(t, dtype=float)
@@ -238,6 +292,7 @@ class StepProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> StepProfile:
         """Both levels scaled by omega_peak / peak."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             return dataclasses.replace(self, omega_after=omega_peak)
         scale = omega_peak / self.peak
@@ -267,19 +322,26 @@ class RampProfile(Profile):
         set_(self, 'ramp_time', _finite('RampProfile', 'ramp_time', self.ramp_time,
                                         positive=True))
         set_(self, 't_start', _finite('RampProfile', 't_start', self.t_start, nonnegative=True))
+        _require_finite('RampProfile.ramp_time', 'the acceleration omega_max / ramp_time',
+                        self.omega_max / self.ramp_time)
+        _require_finite('RampProfile.t_start', 'the end t_start + ramp_time',
+                        self.t_start + self.ramp_time)
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity, rad/s."""
         tt = np.asarray(t, dtype=float)
         frac = np.clip((tt - self.t_start) / self.ramp_time, 0.0, 1.0)
         return _out(t, self.omega_max * frac)
 
+    @_evaluation
     def omega_dot(self, t):
         """omega_max / ramp_time during the ramp, else 0, rad/s^2."""
         tt = np.asarray(t, dtype=float)
         on = (tt >= self.t_start) & (tt < self.t_start + self.ramp_time)
         return _out(t, np.where(on, self.omega_max / self.ramp_time, 0.0))
 
+    @_evaluation
     def angle(self, t):
         """Hub angle, rad."""
         tt = np.asarray(t, dtype=float)
@@ -299,6 +361,7 @@ class RampProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> RampProfile:
         """Same timing, final |w| ``omega_peak`` (same sense of rotation)."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         return dataclasses.replace(self, omega_max=_rescaled(self.omega_max, omega_peak))
 
 
@@ -335,6 +398,15 @@ class SineSweepProfile(Profile):
                                      nonnegative=True))
         set_(self, 'duration', _finite('SineSweepProfile', 'duration', self.duration,
                                        positive=True))
+        f_max = max(self.f_start, self.f_end)
+        _require_finite('SineSweepProfile.amplitude', 'the peak |offset| + |amplitude|',
+                        abs(self.offset) + abs(self.amplitude))
+        _require_finite('SineSweepProfile.f_end', 'the sweep rate (f_end - f_start) / duration',
+                        self._rate)
+        _require_finite('SineSweepProfile.duration', 'the final phase pi (f_start + f_end) '
+                        'duration', math.pi * (self.f_start + self.f_end) * self.duration)
+        _require_finite('SineSweepProfile.amplitude', 'the peak acceleration 2 pi '
+                        'max(f_start, f_end) amplitude', 2 * math.pi * f_max * self.amplitude)
 
     @property
     def _rate(self) -> float:
@@ -344,11 +416,13 @@ class SineSweepProfile(Profile):
     def _phase(self, tau):
         return 2 * np.pi * (self.f_start * tau + 0.5 * self._rate * tau * tau)
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity, rad/s."""
         tau = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
         return _out(t, self.offset + self.amplitude * np.sin(self._phase(tau)))
 
+    @_evaluation
     def omega_dot(self, t):
         """Angular acceleration, rad/s^2 (0 after the sweep)."""
         tt = np.asarray(t, dtype=float)
@@ -375,6 +449,7 @@ class SineSweepProfile(Profile):
         x0 = scale * f0 / k
         return antiderivative(scale * (tau + f0 / k)) - antiderivative(x0)
 
+    @_evaluation
     def angle(self, t):
         """Hub angle, rad."""
         tt = np.asarray(t, dtype=float)
@@ -395,6 +470,7 @@ class SineSweepProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> SineSweepProfile:
         """Offset and amplitude scaled together so that |offset| + |amplitude| = omega_peak."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             raise ValueError('SineSweepProfile.with_peak: a zero sweep has no shape to scale')
         scale = omega_peak / self.peak
@@ -417,7 +493,7 @@ class TableProfile(Profile):
         try:
             t = np.asarray(times, dtype=float).ravel()
             w = np.asarray(omegas, dtype=float).ravel()
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ValueError('TableProfile: times and omegas must be numbers') from None
         if t.size < 2 or t.size != w.size:
             raise ValueError(f'TableProfile needs >= 2 (time, omega) pairs of equal length, '
@@ -427,18 +503,36 @@ class TableProfile(Profile):
         if t[0] < 0 or np.any(np.diff(t) <= 0):
             raise ValueError('TableProfile: times must start at >= 0 and increase strictly')
         self.times, self.omegas = t, w
-        self._w = PchipInterpolator(t, w, extrapolate=False)
-        self._dw = self._w.derivative()
-        self._theta = self._w.antiderivative()
+        overflow = ValueError("TableProfile: the interpolated w or w' overflows (omegas too "
+                              'large for the spacing of the times)')
+        with np.errstate(all='ignore'):
+            # PCHIP's cubic terms stay below ~50 x max(|w|, |slope| x interval): keep
+            # them finite, and the quartic of the angle over the longest interval
+            if not (math.isfinite(64.0 * np.max(np.abs(w)))
+                    and math.isfinite(64.0 * np.max(np.abs(np.diff(w) / np.diff(t))))):
+                raise overflow
+            if not math.isfinite(np.max(np.diff(t)) ** 4):
+                raise ValueError('TableProfile: an interval between times is too long '
+                                 '(its 4th power, in the angle, overflows)')
+            try:
+                self._w = PchipInterpolator(t, w, extrapolate=False)
+            except ValueError:          # scipy: the slopes dydx are not finite
+                raise overflow from None
+            self._dw = self._w.derivative()
+            self._theta = self._w.antiderivative()
+        if not (np.all(np.isfinite(self._w.c)) and np.all(np.isfinite(self._dw.c))):
+            raise overflow
 
     def __repr__(self):
         return f'TableProfile({len(self.times)} points, {self.times[0]}..{self.times[-1]} s)'
 
+    @_evaluation
     def omega(self, t):
         """Angular velocity, rad/s."""
         tt = np.clip(np.asarray(t, dtype=float), self.times[0], self.times[-1])
         return _out(t, self._w(tt))
 
+    @_evaluation
     def omega_dot(self, t):
         """Angular acceleration, rad/s^2 (0 outside the table)."""
         tt = np.asarray(t, dtype=float)
@@ -446,6 +540,7 @@ class TableProfile(Profile):
         d = self._dw(np.clip(tt, self.times[0], self.times[-1]))
         return _out(t, np.where(inside, d, 0.0))
 
+    @_evaluation
     def angle(self, t):
         """Hub angle, rad."""
         tt = np.asarray(t, dtype=float)
@@ -467,6 +562,7 @@ class TableProfile(Profile):
 
     def with_peak(self, omega_peak: float) -> TableProfile:
         """Omegas scaled so the largest |w| is ``omega_peak``."""
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             raise ValueError('TableProfile.with_peak: an all-zero table has no shape to scale')
         return TableProfile(self.times, self.omegas * (omega_peak / self.peak))

@@ -24,7 +24,7 @@ from .params import RodParams
 from .profiles import Profile
 from .result import SimulationResult
 from .rk4 import rk4_step
-from .stepper import NonFiniteStateError, check_coupling
+from .stepper import NonFiniteStateError, check_coupling, check_rotary_inertia
 
 MAX_STEPS = 50_000_000
 _CHUNK = 32768
@@ -34,13 +34,21 @@ _GAUSS = math.sqrt(3.0) / 6.0
 def time_grid(t_end, dt) -> np.ndarray:
     """Sample times 0, dt, 2 dt, ..., ending exactly at ``t_end`` (last step may be short)."""
     for name, value in (('t_end', t_end), ('dt', dt)):
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                             np.floating)):
             raise ValueError(f'{name} must be a number, got {value!r}')
-        if not math.isfinite(value) or value <= 0:
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:           # an int beyond the float range
+            finite = False
+        if not finite or value <= 0:
             raise ValueError(f'{name} must be a finite number > 0, got {value!r}')
     if dt > t_end:
         raise ValueError(f'dt ({dt} s) must not exceed t_end ({t_end} s)')
-    n = math.ceil(t_end / dt - 1e-9)
+    steps = t_end / dt - 1e-9
+    if steps > MAX_STEPS:       # also inf (1e300 / 1e-300), which math.ceil refuses
+        raise ValueError(f't_end/dt = {steps:.4g} steps exceeds the limit of {MAX_STEPS}')
+    n = math.ceil(steps)
     if n > MAX_STEPS:
         raise ValueError(f't_end/dt = {n} steps exceeds the limit of {MAX_STEPS}')
     t = np.arange(n + 1, dtype=float) * dt
@@ -124,7 +132,12 @@ def _velocity_drive(params, co, profile, t, coupling, initial):
 def _torque_function(torque) -> Callable[[float], float]:
     if callable(torque):
         def q(t):
-            value = float(torque(t))
+            returned = torque(t)
+            try:
+                value = float(returned)
+            except (TypeError, ValueError, OverflowError):
+                raise ValueError(f'torque({t}) returned {returned!r}; torque must be a '
+                                 'finite number') from None
             if not math.isfinite(value):
                 raise ValueError(f'torque({t}) returned {value!r}; torque must be finite')
             return value
@@ -133,7 +146,7 @@ def _torque_function(torque) -> Callable[[float], float]:
         raise ValueError(f'torque must be a number or a function of time, got {torque!r}')
     try:
         value = float(torque)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(
             f'torque must be a number or a function of time, got {torque!r}') from None
     if not math.isfinite(value):
@@ -141,19 +154,25 @@ def _torque_function(torque) -> Callable[[float], float]:
     return lambda t: value
 
 
-def _torque_drive(co, torque, t, coupling, initial):
+def _torque_drive(params, co, torque, t, coupling, initial):
     q = _torque_function(torque)
-    state = make_state(initial)
+    state = make_state(initial, scalar=True)
+    check_rotary_inertia(params, coupling, state)
     rates = lambda y, qq: model.torque_drive_rates(co, y, qq, coupling)  # noqa: E731
     out = np.empty((len(t), 6))
     out[0] = state
     qs = np.empty(len(t))
     qs[0] = q(t[0])
     y = tuple(state)
+    times = t.tolist()      # Python floats: overflow gives inf, not a RuntimeWarning
     for k in range(len(t) - 1):
-        h = t[k + 1] - t[k]
-        q_end = q(t[k + 1])
-        y = rk4_step(rates, y, h, qs[k], q(t[k] + 0.5 * h), q_end)
+        h = times[k + 1] - times[k]
+        q_end = q(times[k + 1])
+        try:
+            y = rk4_step(rates, y, h, float(qs[k]), q(times[k] + 0.5 * h), q_end)
+        except ZeroDivisionError:       # paper coupling, J = 0: the mass on the axis
+            raise NonFiniteStateError(f'torque-drive run reached a state without rotary '
+                                      f'inertia at t={t[k+1]} s') from None
         if not all(math.isfinite(c) for c in y):
             raise NonFiniteStateError(f'torque-drive run became non-finite at t={t[k+1]} s')
         out[k + 1] = y
@@ -204,8 +223,8 @@ def simulate(params: RodParams, profile: Profile | None = None, t_end: float | N
             params, co, profile, t, coupling, initial)
         drive = 'velocity'
     else:
-        u, v, du, dv, theta, omega, omega_dot, q = _torque_drive(co, torque, t, coupling,
-                                                                 initial)
+        u, v, du, dv, theta, omega, omega_dot, q = _torque_drive(params, co, torque, t,
+                                                                 coupling, initial)
         drive = 'torque'
     x, y = model.inertial_position(co, u, v, theta)
     return SimulationResult(t=t, u=u, v=v, du=du, dv=dv, theta=theta, omega=omega,

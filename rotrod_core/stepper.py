@@ -25,6 +25,20 @@ def check_coupling(params: RodParams, coupling: str) -> None:
                          'determinant m^2 J); use a disk inertia or coupling="paper"')
 
 
+def check_rotary_inertia(params: RodParams, coupling: str, state: State) -> None:
+    """Raise ValueError if the torque drive has no rotary inertia at ``state``.
+
+    With the paper's coupling and J = 0 the inertia is m rho^2, zero with the mass on
+    the axis: w' is undefined there.
+    """
+    x = float(params.eccentricity) + state.u
+    if coupling == 'paper' and not params.hub_inertia + params.mass * (
+            x * x + state.v * state.v) > 0:
+        raise ValueError('torque drive with the paper coupling needs rotary inertia: '
+                         'hub_inertia > 0, or the mass off the axis (eccentricity > 0 or '
+                         'an initial deflection)')
+
+
 class RealTimeStepper:
     """Classical RK4 at a fixed step ``dt`` under the current command.
 
@@ -60,7 +74,7 @@ class RealTimeStepper:
 
     def reset(self, initial: dict | None = None) -> None:
         """Return to t = 0 and the given initial state (default: at rest, undeflected)."""
-        self._state = make_state(initial)
+        self._state = make_state(initial, scalar=True)
         self.time = 0.0
         self.omega_dot = 0.0
         self.torque = model.hub_torque(self._co, self._state, 0.0, self.coupling)
@@ -75,10 +89,15 @@ class RealTimeStepper:
         """The equations' coefficients for these parameters."""
         return self._co
 
-    def _accept(self, new: tuple) -> State:
+    def _accept(self, new: tuple, drive_name: str, drive_value: float) -> State:
+        """Take the new state, unless it or the drive's value at its end is not finite."""
         if not all(math.isfinite(x) for x in new):
             raise NonFiniteStateError(
                 f'step at t={self.time:.6f} s gave a non-finite state {new}; state kept')
+        if not math.isfinite(drive_value):
+            raise NonFiniteStateError(
+                f'step at t={self.time:.6f} s gave a non-finite {drive_name} {drive_value!r} '
+                f'at the state {new}; state kept')
         self._state = State(*new)
         self.time += self.dt
         return self._state
@@ -90,42 +109,72 @@ class RealTimeStepper:
         """
         wd = finite_number('omega_dot', omega_dot)
         new = rk4_step(self._velocity_rates, self._state, self.dt, wd, wd, wd)
-        state = self._accept(new)
+        torque = model.hub_torque(self._co, new, wd, self.coupling)
+        state = self._accept(new, 'hub torque', torque)
         self.omega_dot = wd
-        self.torque = model.hub_torque(self._co, state, wd, self.coupling)
+        self.torque = torque
         return state
 
     def step_torque(self, torque: float, torque_end: float | None = None) -> State:
-        """Advance one step under the hub torque (N m), linear to ``torque_end`` if given."""
+        """Advance one step under the hub torque (N m), linear to ``torque_end`` if given.
+
+        With the paper's coupling and J = 0, a mass on the axis leaves no rotary
+        inertia: w' is undefined, a :class:`NonFiniteStateError` (state kept).
+        """
         q0 = finite_number('torque', torque)
         q1 = q0 if torque_end is None else finite_number('torque_end', torque_end)
-        new = rk4_step(self._torque_rates, self._state, self.dt, q0, 0.5 * (q0 + q1), q1)
-        state = self._accept(new)
+        try:
+            new = rk4_step(self._torque_rates, self._state, self.dt, q0, 0.5 * (q0 + q1), q1)
+            omega_dot = model.hub_angular_acceleration(self._co, new, q1, self.coupling)
+        except ZeroDivisionError:
+            raise NonFiniteStateError(
+                f'step at t={self.time:.6f} s: no rotary inertia about the axis (J = 0 and '
+                'the mass on the axis), w\' is undefined; state kept') from None
+        state = self._accept(new, "hub angular acceleration w'", omega_dot)
         self.torque = q1
-        self.omega_dot = model.hub_angular_acceleration(self._co, state, q1, self.coupling)
+        self.omega_dot = omega_dot
         return state
 
     def jump_omega(self, omega: float) -> State:
         """Change the hub's angular velocity instantly to ``omega`` (rad/s), physically."""
         w = finite_number('omega', omega)
-        self._state = model.omega_jump(self._co, self._state, w)
+        new = model.omega_jump(self._co, self._state, w)
+        if not all(math.isfinite(x) for x in new):
+            raise NonFiniteStateError(f'a jump to omega={w!r} rad/s gives a non-finite state '
+                                      f'{tuple(new)}; state kept')
+        self._state = new
         return self._state
 
     def set_state(self, **values) -> State:
         """Overwrite some state components by name (validated; others kept)."""
-        self._state = make_state({**self._state._asdict(), **values})
+        self._state = make_state({**self._state._asdict(), **values}, scalar=True)
         return self._state
 
+    def _finite(self, what: str, *values) -> None:
+        if not all(math.isfinite(x) for x in values):
+            raise NonFiniteStateError(f'the {what} of the state {tuple(self._state)} '
+                                      f'overflows: {values}')
+
     def inertial_position(self) -> tuple:
-        """Position (x, y) of the mass in the inertial frame, m."""
+        """Position (x, y) of the mass in the inertial frame, m.
+
+        The state is always finite; a quantity derived from it that overflows (an
+        extreme state) raises :class:`NonFiniteStateError`, as do :meth:`energy` and
+        :meth:`angular_momentum`.
+        """
         s = self._state
         x, y = model.inertial_position(self._co, s.u, s.v, s.theta)
+        self._finite('inertial position', x, y)
         return float(x), float(y)
 
     def energy(self) -> float:
         """Total mechanical energy of the current state, J."""
-        return float(model.energy(self._co, self._state))
+        e = float(model.energy(self._co, self._state))
+        self._finite('energy', e)
+        return e
 
     def angular_momentum(self) -> float:
         """Angular momentum about the axis of the current state, kg m^2/s."""
-        return float(model.angular_momentum(self._co, self._state))
+        L = float(model.angular_momentum(self._co, self._state))
+        self._finite('angular momentum', L)
+        return L

@@ -58,6 +58,7 @@ Eq. 26 run (measured in the bench).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -75,6 +76,7 @@ _MAX_ITERATIONS = 30
 _START_ITERATIONS = 4       # for the first whirl alone: a start value, the other unmodelled
 _DRIFT_SIGNIFICANCE = 25.0  # (|c| / std c)^2 above which a drift term is kept
 _ZERO_PAD = 8               # periodogram length: this many times the number of blocks
+MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (1e4 took 1.2 GB)
 
 
 @dataclass(frozen=True)
@@ -120,6 +122,9 @@ class WhirlSettings:
                                            positive=True))
         set_(self, 'detection_db', finite_number('WhirlSettings.detection_db',
                                                  self.detection_db))
+        if not math.isfinite(self.block_interval):
+            raise ValueError(f'WhirlSettings.max_frequency {self.max_frequency!r} Hz is too '
+                             'small: the block interval 1 / (4 max_frequency) overflows')
 
     @property
     def block_interval(self) -> float:
@@ -202,7 +207,7 @@ def _samples(t, u, v):
     """Validated float arrays ``t`` (s) and ``z = u + i v`` (m); ValueError if unusable."""
     try:
         arrays = [np.asarray(x, dtype=float).ravel() for x in (t, u, v)]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError('t, u and v must be arrays of numbers') from None
     t, u, v = arrays
     if not len(t) == len(u) == len(v):
@@ -540,6 +545,34 @@ def _whirls(fit, data, cfg, window):
 def _estimate(t, z, cfg: WhirlSettings, start=None):
     """The estimate of one window, and the poles (1/s) of its whirls.
 
+    The model is linear in z: the fit runs on z scaled by a power of two (exact) to
+    a largest component in [1, 2), so that squares neither overflow (|z| ~ 1e300)
+    nor underflow (|z| ~ 1e-300); amplitudes, offset and noise are scaled back.
+    """
+    if len(z) == 0:
+        return _estimate_unit(t, z, cfg, start)
+    largest = float(max(np.max(np.abs(z.real)), np.max(np.abs(z.imag))))
+    if largest == 0:
+        return _estimate_unit(t, z, cfg, start)
+    e = math.frexp(largest)[1] - 1
+    unit = np.empty_like(z)
+    unit.real, unit.imag = np.ldexp(z.real, -e), np.ldexp(z.imag, -e)
+    est, poles = _estimate_unit(t, unit, cfg, start)
+
+    def back(x):
+        with np.errstate(over='ignore'):
+            return float(np.ldexp(x, e))
+    est = dataclasses.replace(
+        est, offset=complex(back(est.offset.real), back(est.offset.imag)),
+        noise_rms=back(est.noise_rms),
+        forward=dataclasses.replace(est.forward, amplitude=back(est.forward.amplitude)),
+        backward=dataclasses.replace(est.backward, amplitude=back(est.backward.amplitude)))
+    return est, poles
+
+
+def _estimate_unit(t, z, cfg: WhirlSettings, start=None):
+    """:func:`_estimate` on data of order 1.
+
     The poles include whirls rejected for decay or uncertainty: they are the start
     values for the next window. ``start``: poles to start from (else searched).
     """
@@ -552,7 +585,8 @@ def _estimate(t, z, cfg: WhirlSettings, start=None):
         return _no_estimate(f'gap of {gap:.3g} s between samples (> {cfg.max_gap:g} of the '
                             f'{span:.3g} s window)', samples=n, window=span)
     dt = float(np.median(np.diff(t)))
-    per_block = max(1, int(math.floor(cfg.block_interval / dt + 1e-6)))
+    # (a subnormal dt makes the ratio inf: more samples per block than there are)
+    per_block = max(1, int(math.floor(min(cfg.block_interval / dt, n + 1.0) + 1e-6)))
     if n // per_block < cfg.min_blocks:
         return _no_estimate(f'window too short: {n} samples make {n // per_block} blocks of '
                             f'{per_block}, {cfg.min_blocks} needed', samples=n, window=span)
@@ -650,14 +684,19 @@ class WhirlEstimator:
         if self.sample_interval >= self.window:
             raise ValueError(f'WhirlEstimator.sample_interval ({sample_interval} s) must be '
                              f'shorter than the window ({window} s)')
+        if not self.window / self.sample_interval <= MAX_WINDOW_SAMPLES:
+            raise ValueError(f'WhirlEstimator.window / sample_interval = '
+                             f'{self.window / self.sample_interval:.3g} samples; at most '
+                             f'{MAX_WINDOW_SAMPLES:g} (its buffer and tables grow with it)')
         self.settings = settings or WhirlSettings()
         capacity = 2 * int(math.ceil(self.window / self.sample_interval)) + 16
         self._t = np.empty(capacity)
         self._z = np.empty(capacity, dtype=complex)
         # the start-value tables for the expected window, now rather than in an update
-        per_block = max(1, int(math.floor(self.settings.block_interval / self.sample_interval
-                                          + 1e-6)))
-        blocks = int(round(self.window / self.sample_interval)) // per_block
+        samples = int(round(self.window / self.sample_interval))
+        per_block = max(1, int(math.floor(min(self.settings.block_interval
+                                              / self.sample_interval, samples + 1.0) + 1e-6)))
+        blocks = samples // per_block
         if blocks >= self.settings.min_blocks:
             _deflation(blocks, self.settings.drift_degree)
         self.reset()
