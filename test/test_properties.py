@@ -460,6 +460,9 @@ def test_regression_paper_coupling_without_rotary_inertia_is_not_a_zero_division
     with pytest.raises(ValueError, match='rotary inertia'):
         EngineConfig(params=RodParams(hub_inertia=0.0, eccentricity=0.0), drive='torque',
                      coupling='paper')
+    with pytest.raises(ValueError, match='rotary inertia'):    # was: divide-by-zero, NaN
+        simulate(RodParams(hub_inertia=0.0, eccentricity=0.0), torque=1.0, t_end=0.1,
+                 coupling='paper')
 
 
 @props(40)
