@@ -117,6 +117,44 @@ def machine_stamp(command: str, load: tuple) -> dict:
     }
 
 
+def cpu_jiffies() -> tuple:
+    """(busy, steal) CPU seconds of the whole machine since boot, from /proc/stat."""
+    try:
+        fields = [int(x) for x in Path('/proc/stat').read_text().split('\n', 1)[0].split()[1:]]
+    except (OSError, ValueError):
+        return (float('nan'), float('nan'))
+    user, nice, system, _idle, _iowait, irq, softirq, steal = (fields + [0] * 8)[:8]
+    tick = os.sysconf('SC_CLK_TCK')
+    return ((user + nice + system + irq + softirq) / tick, steal / tick)
+
+
+class OtherLoad:
+    """CPU used on this machine, during a span, by anything but this process's children.
+
+    Busy time of all CPUs (/proc/stat) minus the CPU time of the children this
+    process waited for (the bench and, through it, its nodes and workers); the
+    remainder is other processes and the kernel, in % of one core.
+    """
+
+    def __enter__(self):
+        self.t0, (self.busy0, self.steal0) = time.monotonic(), cpu_jiffies()
+        t = os.times()
+        self.own0 = t.children_user + t.children_system
+        return self
+
+    def __exit__(self, *exc):
+        busy, steal = cpu_jiffies()
+        t = os.times()
+        wall = time.monotonic() - self.t0
+        own = t.children_user + t.children_system - self.own0
+        self.other = 100 * max(0.0, busy - self.busy0 - own) / wall
+        self.steal = 100 * (steal - self.steal0) / wall
+        return False
+
+    def describe(self) -> str:
+        return f'{self.other:.0f} % (steal {self.steal:.0f} %)'
+
+
 # -- the table -----------------------------------------------------------------------------
 
 def build_table(rows: list) -> str:
@@ -237,14 +275,18 @@ def main(argv: list | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix='rotrod-bench-') as tmp:
         tmp = Path(tmp)
         for script, bench_args, timeout in benches:
-            loads.append(f'{script} {os.getloadavg()[0]:.2f}')
-            rows += run_bench(script, bench_args, tmp / f'{script}.json', timeout)
+            load1 = os.getloadavg()[0]
+            with OtherLoad() as other:
+                rows += run_bench(script, bench_args, tmp / f'{script}.json', timeout)
+            loads.append(f'{script}: load {load1:.2f} at start, {other.describe()}')
         rt = json.loads((tmp / 'bench_realtime.py.json').read_text())
         notes.append(f"real-time bench: {duration:g} s run; simulator node run from "
                      f"`{Path(rt['simulator_code']).parent}`, {rt['rmw']}, DDS isolation "
                      f"{rt['isolation']}")
-    notes.append('1-min load average as each bench started: ' + ', '.join(loads)
-                 + '; at the end: ' + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
+    notes.append('per bench, the 1-min load average as it started and the CPU used by '
+                 'other processes and the kernel while it ran, in % of one core: '
+                 + '; '.join(loads) + '; load average at the end: '
+                 + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
     if args.quick:
         notes.append('quick run (`--quick`): shorter runs; the batch target is not judged')
     stamp['run time'] = format_duration(time.monotonic() - t_start)
