@@ -87,22 +87,26 @@ def package_versions() -> str:
     return ', '.join(out)
 
 
-def code_version() -> str:
-    """The commit measured, and whether the tree had uncommitted changes."""
+def code_version(readme: Path | None = None) -> str:
+    """The commit measured, and the files changed since (README, which we write, aside)."""
     try:
         git = ['git', '-C', str(ROOT)]
         head = subprocess.run([*git, 'rev-parse', '--short', 'HEAD'], capture_output=True,
                               text=True, check=True).stdout.strip()
         branch = subprocess.run([*git, 'rev-parse', '--abbrev-ref', 'HEAD'],
                                 capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run([*git, 'status', '--porcelain', '--untracked-files=no'],
-                               capture_output=True, text=True, check=True).stdout.strip()
+        status = subprocess.run([*git, 'status', '--porcelain', '--untracked-files=no'],
+                                capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         return 'not a git checkout'
-    return f'commit {head} ({branch})' + (', with uncommitted changes' if dirty else '')
+    skip = (readme or ROOT / 'README.md').resolve()
+    changed = [line[3:] for line in status.splitlines()
+               if (ROOT / line[3:]).resolve() != skip]
+    return (f'commit {head} ({branch})'
+            + (f', with uncommitted changes to {", ".join(changed)}' if changed else ''))
 
 
-def machine_stamp(command: str, load: tuple) -> dict:
+def machine_stamp(command: str, load: tuple, readme: Path | None = None) -> dict:
     """What the block is stamped with (``run time`` is filled in at the end)."""
     return {
         'date': f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC',
@@ -113,7 +117,7 @@ def machine_stamp(command: str, load: tuple) -> dict:
         'Python': f'{platform.python_implementation()} {platform.python_version()}',
         'packages': package_versions(),
         'load average at start': ', '.join(f'{x:.2f}' for x in load) + ' (1, 5, 15 min)',
-        'code': code_version(),
+        'code': code_version(readme),
     }
 
 
@@ -265,7 +269,7 @@ def main(argv: list | None = None) -> int:
 
     t_start = time.monotonic()
     stamp = machine_stamp(f'.venv/bin/python {shlex.join(["bench/run_all.py", *argv])}',
-                          os.getloadavg())
+                          os.getloadavg(), args.readme)
     if do_write:
         rewrite(args.readme.read_text(), '')      # markers checked before an hour's work
     rows, notes, loads = [], [], []
