@@ -2,12 +2,12 @@
 
     .venv/bin/python bench/bench_estimator.py [--json FILE]
 
-Prints a Markdown table. Columns: the maximum-likelihood estimator of
-rotrod_core.whirl (ML), ESPRIT on the same 10 ms block means after one difference
-(removes a constant offset exactly) and after five (removes a quartic drift, the ML
-estimator's drift model), and a plain interpolated FFT peak (linear trend removed,
-Hann window, parabolic interpolation of log |Z| on each sign of frequency). All see
-1 s windows at 1 kHz of z = u + i v.
+Prints a Markdown table; ``measure()`` returns its rows (bench/results.py). Methods:
+the maximum-likelihood estimator of rotrod_core.whirl (ML), ESPRIT on the same 10 ms
+block means after one difference (removes a constant offset exactly) and after five
+(removes a quartic drift, the ML estimator's drift model), and a plain interpolated FFT
+peak (linear trend removed, Hann window, parabolic interpolation of log |Z| on each
+sign of frequency). All see 1 s windows at 1 kHz of z = u + i v.
 
 Rows: the error against Eq. 28 at constant w over [0, 0.9 w0] (noise-free step and
 plucked starts), the RMS error at 40 dB SNR over 200 trials against the Cramer-Rao
@@ -19,7 +19,6 @@ time spent waiting for a CPU held by other processes).
 
 import argparse
 import gc
-import json
 import math
 import os
 import platform
@@ -35,9 +34,11 @@ os.environ.setdefault('OPENBLAS_NUM_THREADS', '1')
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / 'test')]
+sys.path[:0] = [str(ROOT), str(ROOT / 'test'), str(ROOT / 'bench')]
 
+import results  # noqa: E402  (bench/results.py)
 from reference import W0, eq26  # noqa: E402  (MODEL.md's closed forms)
+from results import Comparison, Row, Target  # noqa: E402
 
 from rotrod_core import (  # noqa: E402
     ConstantProfile,
@@ -208,72 +209,100 @@ def batch_cost(method, run, repeat=300):
     return np.array([timed(lambda w=w: method(*w))[1:] for w in eq26_windows(run, ends)])
 
 
-def median_p99(costs):
-    return f'{np.median(costs):.2f} / {np.percentile(costs, 99):.2f} ms'
+def measure() -> list:
+    """Run the estimator benchmarks; return their :class:`results.Row` list.
 
-
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument('--json', type=Path)
-    args = ap.parse_args()
+    The value is the ML estimator's; the baselines' values on the same windows are its
+    comparisons.
+    """
     names = list(METHODS)
+    baselines = names[1:]
     rows = []
+
+    def row(name, value, unit, **kw):
+        rows.append(Row('estimator', name, float(value), unit, **kw))
+
+    def nan_note(missing, total):
+        return f'{missing} of {total} NaN' if missing else ''
 
     windows = constant_w_windows()
     errs = {n: max_relative_error(METHODS[n], windows) for n in names}
-    rows.append(('constant w in [0, 0.9 w0], noise-free, 22 windows: max relative error',
-                 {n: fmt(100 * e, '.2g') + ' %' for n, e in errs.items()}, '<= 0.1 %',
-                 errs['ML'] <= 1e-3))
+    row('constant w in [0, 0.9 w0], noise-free, 22 windows: max relative error',
+        100 * errs['ML'], '%', target=Target('<=', 0.1), fmt='.3g',
+        comparisons=[Comparison(n, 100 * errs[n], '' if math.isfinite(errs[n])
+                                else 'NaN estimates') for n in baselines])
 
+    trials = 200
+    missing_total = {n: 0 for n in names}
     for label, w in (('w = 0', 0.0), ('w = 2 rad/s', 2.0), ('w = 0.5 w0', 0.5 * W0)):
-        res = {n: noise_trials(METHODS[n], w) for n in names}
-        cells = {n: fmt(r, '.2f') + (f' ({r2} NaN)' if r2 else '') for n, (r, r2) in res.items()}
+        res = {n: noise_trials(METHODS[n], w, trials) for n in names}
+        for n in names:
+            missing_total[n] += res[n][1]
         ratio, missing = res['ML']
-        rows.append((f'40 dB SNR, {label}, 200 trials: RMS error / CRB (worse whirl)', cells,
-                     '<= 3, no NaN', ratio <= 3 and missing == 0))
+        row(f'40 dB SNR, {label}, {trials} trials: RMS error / CRB (worse whirl)', ratio,
+            'x CRB', target=Target('<=', 3), note=nan_note(missing, trials), fmt='.3g',
+            comparisons=[Comparison(n, res[n][0], nan_note(res[n][1], trials)
+                                    or ('' if math.isfinite(res[n][0]) else 'no estimate'))
+                         for n in baselines])
     for label, w in (('0.7 w0', 0.7 * W0), ('0.8 w0', 0.8 * W0), ('0.9 w0', 0.9 * W0)):
-        ratio, missing = noise_trials(METHODS['ML'], w)
-        rows.append((f'40 dB SNR, w = {label} (f1 = {eq28(w)[0]:.2f} Hz): RMS / CRB of '
-                     'the estimates given', {'ML': f'{fmt(ratio, ".2f")} ({missing} NaN)'},
-                     '(no target)', True))
+        ratio, missing = noise_trials(METHODS['ML'], w, trials)
+        given = (f'RMS / CRB of the estimates given {ratio:.3g}' if math.isfinite(ratio)
+                 else 'no estimate given')
+        row(f'40 dB SNR, w = {label} (f1 = {eq28(w)[0]:.2f} Hz), {trials} trials: trials '
+            'without an estimate (NaN; no target)', missing, f'of {trials}', note=given,
+            fmt='.0f')
 
     run = simulate(P, Eq26Profile(), 40.0, dt=DT)
     spin_up = np.round(np.arange(0.999, 15.0005, 0.1), 3)
     res = {n: tracking(METHODS[n], run, spin_up) for n in names}
+    for n in names:
+        missing_total[n] += res[n][2]
     for i, what in ((0, 'centre'), (1, 'newest sample')):
-        cells = {n: fmt(100 * r[i], '.2g') + ' %' + (f' ({r[2]} NaN)' if r[2] else '')
-                 for n, r in res.items()}
-        rows.append((f'Eq. 26 spin-up, {len(spin_up)} windows to 15 s: max error vs Eq. 28 '
-                     f'at w(window {what})', cells, '<= 2 %, no NaN',
-                     res['ML'][i] <= 0.02 and res['ML'][2] == 0))
+        row(f'Eq. 26 spin-up, {len(spin_up)} windows to 15 s: max error vs Eq. 28 at '
+            f'w(window {what})', 100 * res['ML'][i], '%', target=Target('<=', 2),
+            note=nan_note(res['ML'][2], len(spin_up)), fmt='.3g',
+            comparisons=[Comparison(n, 100 * res[n][i], nan_note(res[n][2], len(spin_up)))
+                         for n in baselines])
+    row(f'estimates missing (NaN): the 3 x {trials} trials above with a target and the '
+        f'{len(spin_up)} spin-up windows', missing_total['ML'], 'NaN',
+        target=Target('<=', 0, text='none'), fmt='.0f',
+        comparisons=[Comparison(n, missing_total[n]) for n in baselines])
     worst, missing, total = joint_windows(run)
-    rows.append(('Eq. 26, windows straddling a joint (15, 20, 35 s): max error of the '
-                 'estimates given', {'ML': f'{100 * worst:.2g} % ({missing} of {total} NaN)'},
-                 '(no target)', True))
+    row('Eq. 26, windows straddling a joint (15, 20, 35 s): max error of the estimates '
+        'given (no target: the model is stationary)', 100 * worst, '%',
+        note=f'{missing} of {total} NaN', fmt='.3g')
 
     online = online_cost(run)
     costs = {n: batch_cost(METHODS[n], run) for n in names}
     for i, clock in ((0, 'wall clock'), (1, 'CPU time')):
-        rows.append((f'cost per WhirlEstimator update, 1 s window at 1 kHz, 391 updates: '
-                     f'median / p99, {clock}', {'ML': median_p99(online[:, i])}, '<= 2 ms',
-                     np.percentile(online[:, i], 99) <= 2.0))
-        rows.append((f'cost per batch call (cold start), 1 s window, 300 windows: median / '
-                     f'p99, {clock}', {n: median_p99(c[:, i]) for n, c in costs.items()}, '',
-                     True))
+        row(f'cost per WhirlEstimator update, 1 s window at 1 kHz, {len(online)} updates: '
+            f'p99, {clock}', np.percentile(online[:, i], 99), 'ms', target=Target('<=', 2),
+            note=f'median {np.median(online[:, i]):.2f} ms', fmt='.2f')
+        row(f'cost per batch call (cold start), 1 s window, {len(costs["ML"])} windows: '
+            f'median, {clock}', np.median(costs['ML'][:, i]), 'ms', fmt='.2f',
+            note=f'p99 {np.percentile(costs["ML"][:, i], 99):.2f} ms',
+            comparisons=[Comparison(n, float(np.median(costs[n][:, i])),
+                                    f'p99 {np.percentile(costs[n][:, i], 99):.2f} ms')
+                         for n in baselines])
+    return rows
 
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--json', type=Path, help='write the rows as JSON here')
+    args = ap.parse_args()
     load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    rows = measure()
     stamp = (f'{platform.node()} ({platform.machine()}, {os.cpu_count()} CPUs, load {load}, '
              f'{platform.python_implementation()} {platform.python_version()}), '
              f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC')
     print(f'whirl estimator benchmark on {stamp}\n')
-    print('| measurement | ' + ' | '.join(names) + ' | target | met |')
-    print('|---' * (len(names) + 3) + '|')
-    for name, cells, target, ok in rows:
-        print(f'| {name} | ' + ' | '.join(cells.get(n, '') for n in names)
-              + f' | {target} | {"yes" if ok else "NO"} |')
+    print('Value: the ML estimator (rotrod_core.whirl); compared: the baselines on the same '
+          'windows.\n')
+    print(results.markdown(rows, bench_column=False))
     if args.json:
-        args.json.write_text(json.dumps({'stamp': stamp, 'rows': rows}, indent=1))
-    return 0 if all(r[3] for r in rows) else 1
+        results.dump(args.json, rows, stamp=stamp)
+    return 0 if all(r.met is not False for r in rows) else 1
 
 
 if __name__ == '__main__':

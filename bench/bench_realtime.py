@@ -18,11 +18,13 @@ process's subscriptions:
 * the same real-time run with the experimental EventsExecutor (parameter
   ``executor:=events``), for comparison.
 
-Prints a Markdown table and writes JSON if asked.
+Prints a Markdown table and writes JSON if asked; ``measure()`` returns the rows
+(bench/results.py). The node processes run the code of this checkout: PYTHONPATH is
+made to start with it (inherited by the nodes), and checked before the runs.
 """
 
 import argparse
-import json
+import math
 import os
 import platform
 import signal
@@ -35,15 +37,18 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / 'test')]
+sys.path[:0] = [str(ROOT), str(ROOT / 'test'), str(ROOT / 'bench')]
 
 if not os.environ.get('ROTROD_ISOLATION'):
     os.execv(sys.executable, [sys.executable, str(ROOT / 'test' / 'isolate.py'),
                               sys.executable, *sys.argv])
 
+import results  # noqa: E402  (bench/results.py)
+from results import Comparison, Row, Target  # noqa: E402
 from ros_harness import (  # noqa: E402
     configure_ros_environment,
     console_script,
+    isolation_mode,
     rclpy_test_node,
     ros_arguments,
 )
@@ -179,49 +184,109 @@ def fast_run(node, duration: float) -> dict:
             'received_fraction': float(len(rows) / ((stamps[-1] - stamps[0]) / PERIOD + 1))}
 
 
+def simulator_code() -> str:
+    """Where the simulator console script imports ``rotrod_ros.simulator`` from.
+
+    Asked of the script's own interpreter (its ``#!`` line) with this process's
+    environment, which the node inherits; the bench makes PYTHONPATH start with this
+    checkout, so the code measured is the code beside this file.
+    """
+    script = console_script('simulator')
+    interpreter = [sys.executable]
+    with open(script[0], 'rb') as f:
+        first = f.readline().decode(errors='replace')
+    if first.startswith('#!') and 'python' in first:
+        interpreter = first[2:].split()
+    out = subprocess.run([*interpreter, '-c', 'import rotrod_ros.simulator as m; '
+                          'print(m.__file__)'], capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+def use_this_checkout() -> str:
+    """Put this checkout first on the node processes' PYTHONPATH; return the code path."""
+    paths = [p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]
+    if not paths or Path(paths[0]).resolve() != ROOT:
+        os.environ['PYTHONPATH'] = os.pathsep.join([str(ROOT), *paths])
+    code = simulator_code()
+    if not Path(code).resolve().is_relative_to(ROOT):
+        raise RuntimeError(f'the simulator would run {code}, not the code under {ROOT}')
+    return code
+
+
+def measure(duration: float = 60.0) -> tuple:
+    """Run the real-time benchmarks; return (:class:`results.Row` list, raw results)."""
+    code = use_this_checkout()
+    with rclpy_test_node('rotrod_bench') as node:
+        rt = realtime_run(node, duration)
+        latency = command_latency(node, trials=20)
+        fast = fast_run(node, min(20.0, duration))
+        events = realtime_run(node, min(10.0, duration), executor='events')
+    raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
+           'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
+           'fast': fast, 'events_executor': events}
+    ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
+
+    def exit_note(seconds):
+        return '' if math.isfinite(seconds) else 'did not exit within 5 s; killed'
+
+    def row(name, value, unit, **kw):
+        return Row('realtime', name, value, unit, **kw)
+
+    def received(r):
+        return 100 * r['messages'] / r['expected_messages']
+
+    rows = [
+        row(f'simulator CPU, 1 kHz physics + 100 Hz publishing + markers ({duration:g} s run)',
+            rt['cpu_percent_of_one_core'], '% of one core', target=Target('<=', 15),
+            comparisons=[Comparison(ev, events['cpu_percent_of_one_core'])], fmt='.1f'),
+        row('publication lag behind simulated time (max)', rt['lag_ms_max'], 'ms',
+            target=Target('<=', 2), fmt='.2f',
+            note=f"p99 {rt['lag_ms_p99']:.2f} ms, median {rt['lag_ms_median']:.2f} ms"),
+        row('drift of simulated time from the clock: median lag, last 100 minus first 100 '
+            'publications', rt['lag_drift_ms'], 'ms', fmt='+.3f'),
+        row('publish-interval error (jitter), p99', rt['interval_error_ms_p99'], 'ms',
+            target=Target('<=', 1), note=f"max {rt['interval_error_ms_max']:.2f} ms",
+            fmt='.3f'),
+        row('messages received', received(rt), '% of expected', better='higher', fmt='.2f',
+            note=f"{rt['messages']} / {rt['expected_messages']}",
+            comparisons=[Comparison(ev, received(events),
+                                    f"{events['messages']} / {events['expected_messages']}")]),
+        row(f"cmd/omega -> tip/deflection latency (max of {latency['trials']})",
+            latency['latency_ms_max'], 'ms',
+            target=Target('<=', 2e3 * PERIOD, text='<= 2 publish periods (20 ms)'),
+            note=f"{latency['latency_publish_periods_max']:.2f} periods, median "
+                 f"{latency['latency_ms_median']:.1f} ms", fmt='.1f'),
+        row('as fast as possible (real_time_factor 0), publishing every 10 ms',
+            fast['speed_x_real_time'], 'x real time', better='higher',
+            target=Target('>=', 20), fmt='.1f',
+            note=f"publication step {fast['publish_step_sim_ms_median']:.0f} ms, "
+                 f"{100 * fast['received_fraction']:.1f} % received, "
+                 f"{fast['wall_s']:.0f} s run"),
+        row('exit after SIGINT', rt['exit_after_sigint_s'], 's', fmt='.2f',
+            note=exit_note(rt['exit_after_sigint_s']),
+            comparisons=[Comparison(ev, events['exit_after_sigint_s'],
+                                    exit_note(events['exit_after_sigint_s']))]),
+    ]
+    return rows, raw
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--duration', type=float, default=60.0,
-                    help='length of the real-time run, s (the issue asks >= 60)')
-    ap.add_argument('--json', type=Path, help='write the results as JSON here')
+                    help='length of the real-time run, s (the issue asks >= 60; at least 5)')
+    ap.add_argument('--json', type=Path, help='write the rows and raw results as JSON here')
     args = ap.parse_args()
-    with rclpy_test_node('rotrod_bench') as node:
-        rt = realtime_run(node, args.duration)
-        latency = command_latency(node, trials=20)
-        fast = fast_run(node, min(20.0, args.duration))
-        events = realtime_run(node, min(10.0, args.duration), executor='events')
-    rows = [
-        ('CPU, 1 kHz physics + 100 Hz publishing + markers', '<= 15 % of one core',
-         f"{rt['cpu_percent_of_one_core']:.1f} %"),
-        ('publication lag behind simulated time (max)', '<= 2 ms',
-         f"{rt['lag_ms_max']:.2f} ms (p99 {rt['lag_ms_p99']:.2f}, median "
-         f"{rt['lag_ms_median']:.2f} ms, "
-         f"drift {rt['lag_drift_ms']:+.3f} ms)"),
-        ('publish-interval error, p99', '<= 1 ms',
-         f"{rt['interval_error_ms_p99']:.3f} ms (max {rt['interval_error_ms_max']:.2f} ms)"),
-        ('messages received / expected', '',
-         f"{rt['messages']} / {rt['expected_messages']}"),
-        ('cmd/omega -> tip/deflection latency (max of 20)', '<= 2 publish periods',
-         f"{latency['latency_ms_max']:.1f} ms = {latency['latency_publish_periods_max']:.2f}"
-         f" periods (median {latency['latency_ms_median']:.1f} ms)"),
-        ('as fast as possible, publishing every 10 ms', '>= 20x real time',
-         f"{fast['speed_x_real_time']:.1f}x (publication step "
-         f"{fast['publish_step_sim_ms_median']:.0f} ms)"),
-        ('EventsExecutor instead (10 s)', 'compare',
-         f"CPU {events['cpu_percent_of_one_core']:.0f} %, {events['messages']} / "
-         f"{events['expected_messages']} messages, SIGINT exit "
-         f"{events['exit_after_sigint_s']:.1f} s"),
-    ]
+    if args.duration < 5:
+        ap.error('--duration must be at least 5 s (the drift compares 100 publications '
+                 'at each end)')
+    rows, raw = measure(args.duration)
     print(f'# rotrod simulator real-time benchmark ({args.duration:g} s run, '
           f'{platform.processor() or platform.machine()}, {os.cpu_count()} cores, '
           f'Python {platform.python_version()})\n')
-    print('| measure | target | measured |\n|---|---|---|')
-    for r in rows:
-        print('| ' + ' | '.join(r) + ' |')
+    print(f"simulator code: {raw['simulator_code']}\n")
+    print(results.markdown(rows, bench_column=False))
     if args.json:
-        args.json.write_text(json.dumps({
-            'date': datetime.now(timezone.utc).isoformat(), 'realtime': rt,
-            'command_latency': latency, 'fast': fast, 'events_executor': events}, indent=2))
+        results.dump(args.json, rows, date=datetime.now(timezone.utc).isoformat(), **raw)
     return 0
 
 
