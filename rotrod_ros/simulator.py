@@ -326,11 +326,15 @@ class SimulatorNode(Node):
         return Sample(due, eng.time, messages.stamp(self._stamps.stamp(eng.time)), eng.state,
                       eng.torque, eng.frequencies(), eng.inertial_position(), markers)
 
-    def _tick(self) -> tuple[list, float]:
-        """Integrate up to the time due now; return the samples to publish and the wait."""
+    def _tick(self) -> tuple[list, float | None]:
+        """Integrate up to the time due now.
+
+        Returns the samples to publish and the monotonic wall time at which the next
+        tick is due (None: at once).
+        """
         eng = self.engine
         if self._paused or eng.halted:
-            return [], IDLE_WAIT
+            return [], time.monotonic() + IDLE_WAIT
         pacer = self._pacer
         if pacer.paced:
             now = time.monotonic()
@@ -359,17 +363,16 @@ class SimulatorNode(Node):
                 self._countdown = self._publish_steps
                 if not pacer.paced:
                     break
-        wait = 0.0
+        wake = None
         if pacer.paced and not eng.halted:
-            wait = (pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
-                    - time.monotonic())
-        return samples, wait
+            wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
+        return samples, wake
 
     def _run(self) -> None:
         try:
             while not self._stop.is_set():
                 with self._lock:
-                    samples, wait = self._tick()
+                    samples, wake = self._tick()
                     settings, config = self.settings, self.engine.config
                 for sample in samples:
                     if sample.due is not None:
@@ -378,7 +381,10 @@ class SimulatorNode(Node):
                             return
                     self._publish(sample, settings, config)
                 self._publish_diagnostics()
-                if wait > 0:
+                # the next tick is due at an absolute time: the publication's wait and
+                # the work after it (estimate, diagnostics) must not delay it
+                wait = None if wake is None else wake - time.monotonic()
+                if wait is not None and wait > 0:
                     self._stop.wait(wait)
         except Exception as exc:  # report any failure, then stop the physics
             if self._stop.is_set() or not self.context.ok():
