@@ -106,6 +106,10 @@ class Ramp:
         return (w1 - w0) / (t1 - t0)
 
 
+def _start(ramp: Ramp) -> float:
+    return ramp.start
+
+
 def _omega(name: str, value) -> float:
     """A finite angular velocity within +-MAX_OMEGA, rad/s; else ValueError."""
     w = finite_number(name, value)
@@ -238,7 +242,6 @@ class OmegaSetpointShaper:
         """Hold ``omega`` (rad/s) from ``time`` (s) on; forget the stream."""
         w, t = _omega('omega', omega), finite_number('time', time)
         self._ramps = [Ramp((t, t), (w, w))]
-        self._starts = [t]
         self._last_arrival = None
         self._recent: deque = deque(maxlen=3)   # (due time, setpoint) of the latest ones
         self._envelope.clear()
@@ -247,7 +250,7 @@ class OmegaSetpointShaper:
         self.late_setpoints = 0
 
     def _ramp_at(self, t: float) -> Ramp:
-        return self._ramps[max(0, bisect_right(self._starts, t) - 1)]
+        return self._ramps[max(0, bisect_right(self._ramps, t, key=_start) - 1)]
 
     def omega(self, t: float) -> float:
         """Shaped angular velocity at time ``t`` (s), rad/s."""
@@ -262,7 +265,7 @@ class OmegaSetpointShaper:
     @property
     def last_command_time(self) -> float:
         """Arrival time (s) of the latest setpoint (or the reset time)."""
-        return self._last_arrival if self._last_arrival is not None else self._starts[0]
+        return self._last_arrival if self._last_arrival is not None else self._ramps[0].start
 
     @property
     def target_reached_at(self) -> float:
@@ -303,7 +306,7 @@ class OmegaSetpointShaper:
         if self._last_arrival is not None and t < self._last_arrival:
             raise ValueError(f'setpoint time {t} s precedes the previous one '
                              f'({self._last_arrival} s)')
-        t = max(t, self._starts[0])
+        t = max(t, self._ramps[0].start)
         grid = self._place_on_grid(t)
         due = (t if grid is None else grid) + self.delay
         recent = self._recent
@@ -324,9 +327,8 @@ class OmegaSetpointShaper:
             reach = t + self.interval
             target = float(np.interp(reach, *path)) if path else w_set
         w0 = self.omega(start)
-        while len(self._ramps) > 1 and self._starts[-1] >= start:
+        while len(self._ramps) > 1 and self._ramps[-1].start >= start:
             self._ramps.pop()
-            self._starts.pop()
         end = max(reach, start + abs(target - w0) / limit)
         times, omegas = [start, end], [w0, target]
         if path and end == reach and path[0][-1] > end:
@@ -340,7 +342,6 @@ class OmegaSetpointShaper:
         _within_limit(times, omegas, limit)
         ramp = Ramp(tuple(times), tuple(omegas))
         self._ramps.append(ramp)
-        self._starts.append(start)
         self.setpoint = w_set
         return ramp
 
@@ -368,7 +369,6 @@ class OmegaSetpointShaper:
 
     def forget_before(self, t: float) -> None:
         """Drop ramps that ended before time ``t`` (s); keeps memory bounded."""
-        i = max(0, bisect_right(self._starts, t) - 1)
+        i = max(0, bisect_right(self._ramps, t, key=_start) - 1)
         if i:
             del self._ramps[:i]
-            del self._starts[:i]
