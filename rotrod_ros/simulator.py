@@ -231,9 +231,9 @@ class SimulatorNode(Node):
         on simulated time and see only what was published, so the latest
         publication's simulated time plus the wall time since it, at the factor: it
         follows the simulation's actual progress also when the machine cannot keep
-        up. Never before the engine's time; not capped above either, since when the
-        physics thread lags, a cap would date a run of arrivals early, and the
-        setpoint shaper relies on delivery delays being one-sided (late, not early).
+        up. Not capped above, since when the physics thread lags, a cap would date a
+        run of arrivals early, and the setpoint shaper relies on delivery delays being
+        one-sided (late, not early). The engine moves a time before its own forward.
         """
         if self._paused or self.engine.halted or not self._pacer.paced:
             return None
@@ -243,7 +243,7 @@ class SimulatorNode(Node):
             at = sim + (now - wall) * self._pacer.factor
         else:
             at = self._pacer.sim_time(now)
-        return max(at, self.engine.time)
+        return at
 
     # Two callbacks, not one shared helper: rclpy throttles a log call per call site,
     # and a rejection on one topic must not silence the other's.
@@ -277,8 +277,9 @@ class SimulatorNode(Node):
             was_halted = self.engine.halted
             self.engine.reset()
             self._trail.clear()
-            if self._estimator is not None:
-                self._estimator.reset()
+            # a fresh estimator, not reset() in place: the physics thread may be
+            # pushing into the current one outside the lock
+            self._estimator = self._make_estimator(self.settings)
             self._countdown = 0
             self._restart_clock()
             t = self.engine.time
