@@ -123,6 +123,10 @@ NODE_SPECS = (
          '(rclpy\'s experimental EventsExecutor: measured worse, see '
          'bench/bench_realtime.py); physics runs in its own thread',
          choices=EXECUTORS, read_only=True),
+    Spec('realtime_priority', 50,
+         'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
+         '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
+         'warning otherwise', 0, 99, integer=True, read_only=True),
 )
 
 ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
@@ -145,6 +149,7 @@ class NodeSettings:
     estimate_window: float = 1.0
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
+    realtime_priority: int = 50
 
     @property
     def publish_period(self) -> float:

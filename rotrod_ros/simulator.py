@@ -57,7 +57,7 @@ from rotrod_core.geometry import rod_centerline, sphere_radius
 from rotrod_core.model import State
 from rotrod_core.whirl import WhirlEstimator
 
-from . import messages, node_main
+from . import messages, node_main, scheduling
 from .node_main import ConfigurationError
 from .pacing import Pacer, StampClock
 from .parameters import ALL_SPECS, SPECS_BY_NAME, Spec, build_settings
@@ -122,6 +122,10 @@ class SimulatorNode(Node):
         self._paused = False
         self._overruns = 0
         self._failure: str | None = None
+        self._priority = 0
+        """SCHED_FIFO priority the physics thread runs at (0: ordinary)."""
+        self._priority_refused: int | None = None
+        """A priority the system refused (not asked for again)."""
         self._pacer = Pacer(self.settings.real_time_factor, 0.0, time.monotonic())
         self._stamps = StampClock(time.time() if not self.settings.publishes_clock else 0.0)
         self._countdown = 0
@@ -278,9 +282,10 @@ class SimulatorNode(Node):
             self.engine.reset()
             self._trail.clear()
             # a fresh estimator, not reset() in place: the physics thread may be
-            # pushing into the current one outside the lock
+            # pushing into the current one outside the lock. The publication grid goes
+            # on, so the first state after the reset is stamped after any publication
+            # the physics thread still has to send from before it.
             self._estimator = self._make_estimator(self.settings)
-            self._countdown = 0
             self._restart_clock()
             t = self.engine.time
         response.success = True
@@ -369,18 +374,40 @@ class SimulatorNode(Node):
             wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
         return samples, wake
 
+    def _schedule(self) -> None:
+        """Run this (the physics) thread at ``realtime_priority`` while paced.
+
+        As fast as possible there is nothing to be on time for, and a real-time thread
+        that never sleeps would starve ordinary ones; so it then runs as ordinary.
+        """
+        want = self.settings.realtime_priority if self._pacer.paced else 0
+        if want == self._priority or want == self._priority_refused:
+            return
+        problem = scheduling.set_current_thread_priority(want)
+        if problem:
+            self._priority_refused = want
+            self.get_logger().warning(f'realtime_priority: {problem}; the physics thread '
+                                      'keeps ordinary scheduling')
+            return
+        if want:
+            self.get_logger().info(f'physics thread at SCHED_FIFO priority {want}')
+        self._priority = want
+
     def _run(self) -> None:
         try:
             while not self._stop.is_set():
+                self._schedule()
                 with self._lock:
                     samples, wake = self._tick()
-                    settings, config = self.settings, self.engine.config
+                    # what the samples were computed with, also if a service or a
+                    # parameter change replaces it while they are being published
+                    context = self.settings, self.engine.config, self._estimator
                 for sample in samples:
                     if sample.due is not None:
                         early = sample.due - time.monotonic()
                         if early > 0 and self._stop.wait(early):
                             return
-                    self._publish(sample, settings, config)
+                    self._publish(sample, *context)
                 self._publish_diagnostics()
                 # the next tick is due at an absolute time: the publication's wait and
                 # the work after it (estimate, diagnostics) must not delay it
@@ -395,7 +422,7 @@ class SimulatorNode(Node):
             self._publish_diagnostics(force=True)
 
     # ----------------------------------------------------------------- publishing
-    def _publish(self, s: Sample, settings, config) -> None:
+    def _publish(self, s: Sample, settings, config, estimator) -> None:
         self._published = (s.time, time.monotonic())
         st = s.state
         self._pub_joint.publish(messages.joint_state(s.stamp, st.theta, st.omega, s.torque))
@@ -405,7 +432,6 @@ class SimulatorNode(Node):
         self._pub_frequencies.publish(messages.frequencies(*s.frequencies))
         if settings.publishes_clock:
             self._pub_clock.publish(messages.clock(s.stamp))
-        estimator = self._estimator
         if estimator is not None:
             estimate = estimator.push(s.time, st.u, st.v)
             if estimate is not None:

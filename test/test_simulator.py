@@ -3,6 +3,7 @@ offline run (through the ROS test harness; DDS stays on this machine)."""
 
 import hashlib
 import math
+import os
 import time
 
 import numpy as np
@@ -57,6 +58,8 @@ def param(name, value) -> Parameter:
         v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
     elif isinstance(value, float):
         v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+    elif isinstance(value, int) and not isinstance(value, bool):
+        v = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
     else:
         raise TypeError(value)
     return Parameter(name=name, value=v)
@@ -344,3 +347,55 @@ def test_frequency_estimate_from_the_motion_matches_eq28_and_is_nan_at_rest(
     for f1, f2 in late:
         assert f1 == pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-3)
         assert f2 == pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-3)
+
+
+def fifo_threads(pid):
+    """(tid, priority) of the process's threads that run under SCHED_FIFO."""
+    out = []
+    for tid in os.listdir(f'/proc/{pid}/task'):
+        try:
+            if os.sched_getscheduler(int(tid)) == os.SCHED_FIFO:
+                out.append((int(tid), os.sched_getparam(int(tid)).sched_priority))
+        except ProcessLookupError:
+            pass
+    return out
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason='SCHED_FIFO needs root here')
+def test_the_physics_thread_alone_runs_at_realtime_priority_while_paced(
+        ros_processes, ros_node, request):
+    ns = namespace(request)
+    sim = start_simulator(ros_processes, ns, realtime_priority=30)
+    sim.wait_for_output('physics thread at SCHED_FIFO priority 30', timeout=10)
+    assert [p for _, p in fifo_threads(sim.pid)] == [30]      # one thread: physics
+    # as fast as possible there is nothing to be on time for: ordinary again
+    assert set_parameters(ros_node, ns, param('real_time_factor', 0.0)).results[0].successful
+    ros_node.spin_until(lambda: not fifo_threads(sim.pid), 10, 'ordinary scheduling')
+    assert set_parameters(ros_node, ns, param('real_time_factor', 1.0)).results[0].successful
+    ros_node.spin_until(lambda: fifo_threads(sim.pid), 10, 'SCHED_FIFO again')
+    # off by parameter
+    ns0 = ns + '_off'
+    off = start_simulator(ros_processes, ns0, realtime_priority=0)
+    ros_node.spin_for(0.5)
+    assert fifo_threads(off.pid) == []
+
+
+def test_resets_in_quick_succession_keep_stamps_increasing_and_the_node_running(
+        ros_processes, ros_node, request):
+    # a reset lands while the physics thread is publishing what it computed before
+    # it: the publications (and the whirl estimate fed by them) must stay in order
+    ns = namespace(request)
+    sim = start_simulator(ros_processes, ns, real_time_factor=FAST, estimate_window=0.2,
+                          estimate_rate=50.0)
+    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+    pub = omega_publisher(ros_node, ns)
+    ros_node.spin_until(lambda: len(joint) > 10, 10, 'joint_states')
+    for i in range(60):
+        pub.publish(Float64(data=0.5))
+        ros_node.spin_for(0.01 * (i % 4))
+        assert ros_node.call_service(Trigger, f'{ns}/rotrod_simulator/reset').success
+    n = len(joint)
+    ros_node.spin_until(lambda: len(joint) > n + 20, 10, 'publishing after the resets')
+    assert sim.running and 'physics thread failed' not in sim.output
+    stamps = np.array([stamp(m) for m in joint])
+    assert np.all(np.diff(stamps) > 0)

@@ -1,0 +1,63 @@
+"""Real-time scheduling of the calling thread (Linux SCHED_FIFO), as ros2_control does.
+
+A thread under SCHED_FIFO runs as soon as it is runnable, ahead of every ordinary
+(SCHED_OTHER) thread, so its wake-ups are not delayed by other processes on a busy
+machine. It needs root or CAP_SYS_NICE (or an ``rtprio`` limit, ``ulimit -r``); where
+it is not permitted the thread stays as it was and the reason is returned, for the
+caller to log. The kernel's real-time throttling (``sched_rt_runtime_us``, 95 % by
+default) keeps a runaway real-time thread from locking up a core.
+
+Python threads share one interpreter lock: a real-time thread that wants it waits
+for the thread holding it to give it up, which CPython forces after the switch
+interval (5 ms by default). :data:`SWITCH_INTERVAL` shortens that wait.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+MAX_PRIORITY = 99
+"""Highest SCHED_FIFO priority on Linux."""
+
+SWITCH_INTERVAL = 0.0005
+"""Interpreter-lock switch interval, s, while a thread runs at real-time priority."""
+
+_ORDINARY_SWITCH_INTERVAL = sys.getswitchinterval()
+"""The interpreter's switch interval before this module changed it, s."""
+
+
+def supported() -> bool:
+    """Whether this platform has SCHED_FIFO and per-thread scheduling calls."""
+    return hasattr(os, 'sched_setscheduler') and hasattr(os, 'SCHED_FIFO')
+
+
+def set_current_thread_priority(priority: int) -> str | None:
+    """Run the calling thread at SCHED_FIFO ``priority`` (1..99), or ordinary at 0.
+
+    Returns None on success, else why it could not be done (the thread's scheduling
+    is then unchanged). Also sets the interpreter's switch interval: SWITCH_INTERVAL
+    at a real-time priority, back to the one before otherwise.
+    """
+    if isinstance(priority, bool) or not isinstance(priority, int) or not (
+            0 <= priority <= MAX_PRIORITY):
+        raise ValueError(f'priority must be an integer in [0, {MAX_PRIORITY}], '
+                         f'got {priority!r}')
+    if not supported():
+        return f'SCHED_FIFO is not available on {sys.platform}'
+    policy = os.SCHED_FIFO if priority else os.SCHED_OTHER
+    try:
+        # pid 0: the calling thread (Linux schedules threads, not processes)
+        os.sched_setscheduler(0, policy, os.sched_param(priority))
+    except OSError as exc:
+        return (f'cannot set SCHED_FIFO priority {priority}: {exc.strerror} (needs root, '
+                'CAP_SYS_NICE or an rtprio limit: ulimit -r)')
+    sys.setswitchinterval(SWITCH_INTERVAL if priority else _ORDINARY_SWITCH_INTERVAL)
+    return None
+
+
+def current_thread_priority() -> int:
+    """The calling thread's SCHED_FIFO priority (0: not real-time)."""
+    if not supported() or os.sched_getscheduler(0) != os.SCHED_FIFO:
+        return 0
+    return os.sched_getparam(0).sched_priority

@@ -1,0 +1,67 @@
+"""Real-time scheduling of the physics thread (rotrod_ros/scheduling.py), checked
+through the kernel's own view of each thread's policy."""
+
+import os
+import subprocess
+import sys
+import threading
+
+import pytest
+
+from rotrod_ros import scheduling
+
+ROOT = os.geteuid() == 0
+NOBODY = 65534
+
+
+def in_thread(fn):
+    out = {}
+    t = threading.Thread(target=lambda: out.setdefault('value', fn()))
+    t.start()
+    t.join()
+    return out['value']
+
+
+@pytest.mark.skipif(not ROOT, reason='SCHED_FIFO needs root here')
+def test_fifo_applies_to_the_calling_thread_only_and_can_be_undone():
+    before = sys.getswitchinterval()
+
+    def run():
+        tid = threading.get_native_id()
+        assert scheduling.set_current_thread_priority(50) is None
+        seen = (os.sched_getscheduler(tid), os.sched_getparam(tid).sched_priority,
+                scheduling.current_thread_priority(), sys.getswitchinterval(),
+                os.sched_getscheduler(main))
+        assert scheduling.set_current_thread_priority(0) is None
+        return seen, os.sched_getscheduler(tid), sys.getswitchinterval()
+
+    main = threading.get_native_id()
+    (policy, prio, current, interval, main_policy), after, restored = in_thread(run)
+    assert (policy, prio, current) == (os.SCHED_FIFO, 50, 50)
+    assert interval == pytest.approx(scheduling.SWITCH_INTERVAL)
+    assert main_policy == os.SCHED_OTHER            # the other threads are untouched
+    assert after == os.SCHED_OTHER and scheduling.current_thread_priority() == 0
+    assert restored == pytest.approx(before)
+
+
+@pytest.mark.skipif(not ROOT, reason='dropping to an unprivileged user needs root')
+def test_without_privilege_it_is_refused_with_a_reason_and_nothing_changes():
+    # the interpreter lives under /root: drop to nobody after it has started
+    code = ('import os, resource, sys\n'
+            'from rotrod_ros import scheduling as s\n'
+            'resource.setrlimit(resource.RLIMIT_RTPRIO, (0, 0))\n'
+            f'os.setgroups([]); os.setgid({NOBODY}); os.setuid({NOBODY})\n'
+            'r = s.set_current_thread_priority(50)\n'
+            'print(r); print(os.sched_getscheduler(0) == os.SCHED_OTHER, '
+            'sys.getswitchinterval())\n')
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         check=True, env={**os.environ, 'PYTHONPATH': os.pathsep.join(sys.path)})
+    reason, state = out.stdout.splitlines()
+    assert 'cannot set SCHED_FIFO priority 50' in reason and 'CAP_SYS_NICE' in reason
+    assert state == f'True {sys.getswitchinterval()}'
+
+
+@pytest.mark.parametrize('bad', [-1, 100, 1.5, True, '50', None])
+def test_a_priority_outside_0_to_99_is_an_error(bad):
+    with pytest.raises(ValueError, match='priority must be an integer'):
+        scheduling.set_current_thread_priority(bad)
