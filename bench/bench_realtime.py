@@ -16,7 +16,9 @@ process's subscriptions:
 * as-fast-as-possible mode (real_time_factor 0): simulated seconds per wall second
   while publishing every 10 ms of simulated time;
 * the same real-time run with the experimental EventsExecutor (parameter
-  ``executor:=events``), for comparison.
+  ``executor:=events``), and with ordinary scheduling of the physics thread
+  (``realtime_priority:=0``; the default runs it at SCHED_FIFO priority 50), for
+  comparison.
 
 Prints a Markdown table and writes JSON if asked; ``measure()`` returns the rows
 (bench/results.py). The node processes run the code of this checkout: PYTHONPATH is
@@ -46,6 +48,7 @@ if not os.environ.get('ROTROD_ISOLATION'):
 import results  # noqa: E402  (bench/results.py)
 from results import Comparison, Row, Target  # noqa: E402
 from ros_harness import (  # noqa: E402
+    HarnessTimeout,
     configure_ros_environment,
     console_script,
     isolation_mode,
@@ -72,8 +75,12 @@ def cpu_seconds(pid: int) -> float:
 class Simulator:
     """The simulator console script as a child process."""
 
+    extra: dict = {}
+    """Parameters given to every simulator started (--param)."""
+
     def __init__(self, **params):
-        cmd = [*console_script('simulator'), *ros_arguments(params=params)]
+        cmd = [*console_script('simulator'),
+               *ros_arguments(params={**Simulator.extra, **params})]
         self.proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                      text=True)
 
@@ -104,8 +111,8 @@ def collect(node, topic, msg_type):
     return out
 
 
-def realtime_run(node, duration: float, executor: str = 'single_threaded') -> dict:
-    sim = Simulator(executor=executor)
+def realtime_run(node, duration: float, **params) -> dict:
+    sim = Simulator(**params)
     joint = collect(node, 'joint_states', JointState)
     try:
         node.spin_until(lambda: len(joint) > 50, 30, 'simulator publishing')
@@ -120,7 +127,7 @@ def realtime_run(node, duration: float, executor: str = 'single_threaded') -> di
     lag = source - stamps
     interval_error = np.abs(np.diff(source) - PERIOD)
     return {
-        'executor': executor, 'duration_s': t1 - t0, 'messages': len(rows),
+        'params': params, 'duration_s': t1 - t0, 'messages': len(rows),
         'expected_messages': round((t1 - t0) / PERIOD),
         'cpu_percent_of_one_core': 100 * (c1 - c0) / (t1 - t0),
         'lag_ms_median': 1e3 * float(np.median(lag)) if len(lag) else None,
@@ -144,7 +151,7 @@ def command_latency(node, trials: int) -> dict:
     try:
         node.spin_until(lambda: pub.get_subscription_count() > 0 and len(defl) > 20, 30,
                         'simulator ready')
-        for _ in range(trials):
+        for trial in range(trials):
             reply = node.call_service(Trigger, 'rotrod_simulator/reset')
             assert reply.success
             node.spin_for(0.2)
@@ -155,7 +162,13 @@ def command_latency(node, trials: int) -> dict:
             def moved(n=n, sent=sent):
                 return [src for m, src, _ in defl[n:]
                         if src > sent and (m.vector.x != 0.0 or m.vector.y != 0.0)]
-            first = node.spin_until(moved, 5, 'deflection moves')[0]
+            try:
+                first = node.spin_until(moved, 5, 'deflection moves')[0]
+            except HarnessTimeout as exc:
+                last = defl[-1][0].vector if defl else None
+                raise HarnessTimeout(f'trial {trial}: {exc}; {len(defl) - n} deflections '
+                                     f'received since the command, the last {last}, '
+                                     f'simulator exit code {sim.proc.poll()}') from None
             latencies.append(first - sent)
     finally:
         sim.stop()
@@ -221,10 +234,12 @@ def measure(duration: float = 60.0) -> tuple:
         latency = command_latency(node, trials=20)
         fast = fast_run(node, min(20.0, duration))
         events = realtime_run(node, min(10.0, duration), executor='events')
+        ordinary = realtime_run(node, duration, realtime_priority=0)
     raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
-           'fast': fast, 'events_executor': events}
+           'fast': fast, 'events_executor': events, 'ordinary_scheduling': ordinary}
     ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
+    od = f"ordinary scheduling, realtime_priority 0 ({ordinary['duration_s']:.0f} s run)"
 
     def exit_note(seconds):
         return '' if math.isfinite(seconds) else 'did not exit within 5 s; killed'
@@ -241,12 +256,16 @@ def measure(duration: float = 60.0) -> tuple:
             comparisons=[Comparison(ev, events['cpu_percent_of_one_core'])], fmt='.1f'),
         row('publication lag behind simulated time (max)', rt['lag_ms_max'], 'ms',
             target=Target('<=', 2), fmt='.2f',
-            note=f"p99 {rt['lag_ms_p99']:.2f} ms, median {rt['lag_ms_median']:.2f} ms"),
+            note=f"p99 {rt['lag_ms_p99']:.2f} ms, median {rt['lag_ms_median']:.2f} ms",
+            comparisons=[Comparison(od, ordinary['lag_ms_max'],
+                                    f"p99 {ordinary['lag_ms_p99']:.2f} ms")]),
         row('drift of simulated time from the clock: median lag, last 100 minus first 100 '
             'publications', rt['lag_drift_ms'], 'ms', fmt='+.3f'),
         row('publish-interval error (jitter), p99', rt['interval_error_ms_p99'], 'ms',
             target=Target('<=', 1), note=f"max {rt['interval_error_ms_max']:.2f} ms",
-            fmt='.3f'),
+            fmt='.3f', comparisons=[Comparison(
+                od, ordinary['interval_error_ms_p99'],
+                f"max {ordinary['interval_error_ms_max']:.2f} ms")]),
         row('messages received', received(rt), '% of expected', better='higher', fmt='.2f',
             note=f"{rt['messages']} / {rt['expected_messages']}",
             comparisons=[Comparison(ev, received(events),
@@ -275,7 +294,13 @@ def main() -> int:
     ap.add_argument('--duration', type=float, default=60.0,
                     help='length of the real-time run, s (the issue asks >= 60; at least 5)')
     ap.add_argument('--json', type=Path, help='write the rows and raw results as JSON here')
+    ap.add_argument('--param', action='append', default=[], metavar='NAME:=VALUE',
+                    help='a simulator parameter for every run (exploration; the README '
+                         'table is made with the defaults)')
     args = ap.parse_args()
+    for p in args.param:
+        name, _, value = p.partition(':=')
+        Simulator.extra[name] = value     # passed as written (YAML)
     if args.duration < 5:
         ap.error('--duration must be at least 5 s (the drift compares 100 publications '
                  'at each end)')
