@@ -22,7 +22,7 @@ import math
 import sys
 
 import rclpy
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from std_msgs.msg import Float64
@@ -37,7 +37,7 @@ from rotrod_core.profiles import (
     TableProfile,
 )
 
-from . import node_main
+from . import node_main, scheduling
 from .node_main import ConfigurationError
 
 NODE_NAME = 'rotrod_profile_publisher'
@@ -66,6 +66,9 @@ PARAMETERS = (
      (0.0, 1e9)),
     ('loop', False, 'start the profile over at the end', None),
     ('hold', False, 'after the end, keep publishing the last value until stopped', None),
+    ('realtime_priority', 50, 'SCHED_FIFO priority of the node\'s thread, so the stream '
+     'stays punctual on a busy machine, 1..99; 0 = ordinary scheduling. Needs root or '
+     'CAP_SYS_NICE; refused with a warning otherwise', (0, scheduling.MAX_PRIORITY)),
 )
 
 
@@ -100,7 +103,10 @@ class ProfilePublisher(Node):
         values = {}
         for name, default, description, bounds in PARAMETERS:
             d = ParameterDescriptor(description=description, read_only=True)
-            if bounds:
+            if bounds and isinstance(default, int):
+                d.integer_range = [IntegerRange(from_value=bounds[0], to_value=bounds[1],
+                                                step=0)]
+            elif bounds:
                 d.floating_point_range = [FloatingPointRange(from_value=bounds[0],
                                                              to_value=bounds[1], step=0.0)]
             try:
@@ -116,6 +122,7 @@ class ProfilePublisher(Node):
         self.rate = values['rate']
         self.duration = values['duration'] or (self.profile.end_time or 0.0)
         self.loop, self.hold = values['loop'], values['hold']
+        self.realtime_priority = values['realtime_priority']
         self.name = values['profile']
         self.done = False
         self._start = None
@@ -164,6 +171,16 @@ class ProfilePublisher(Node):
                                            f'{self.duration:g} s')
                 return
 
+    def schedule(self) -> None:
+        """Run the calling (executor) thread at ``realtime_priority``, or say why not."""
+        if not self.realtime_priority:
+            return
+        problem = scheduling.set_current_thread_priority(self.realtime_priority)
+        if problem:
+            self.get_logger().warning(f'realtime_priority: {problem}; ordinary scheduling')
+        else:
+            self.get_logger().info(f'streaming at SCHED_FIFO priority {self.realtime_priority}')
+
     def flush(self, timeout: float = 2.0) -> bool:
         """Wait until subscribers have acknowledged every sample (reliable QoS)."""
         return self._pub.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
@@ -180,7 +197,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(args: list | None = None) -> int:
     """Entry point of ``ros2 run rotrod profile_publisher``."""
     return node_main.run(NODE_NAME, ProfilePublisher, _parser(), args,
-                         until=lambda node: node.done,
+                         until=lambda node: node.done, started=ProfilePublisher.schedule,
                          finished=lambda node: node.done and node.flush())
 
 

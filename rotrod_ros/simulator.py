@@ -21,7 +21,8 @@ Services:
   ~/reset  std_srvs/Trigger   back to the initial state; clears a halt
   ~/pause  std_srvs/SetBool   true: pause, false: resume
 
-Physics runs in its own thread at a fixed step; each tick integrates in whole steps
+Physics runs in its own thread at a fixed step (under SCHED_FIFO at
+``realtime_priority`` where the system permits); each tick integrates in whole steps
 up to the simulated time due now (``real_time_factor`` x wall time), so simulated
 time does not drift from the clock. The ROS executor only handles commands,
 services and parameters. The physics is rotrod_core's :class:`SimulationEngine`.
@@ -490,6 +491,16 @@ def make_executor(name: str, context=None):
 
 def _started(node: SimulatorNode) -> None:
     node.start()
+    priority = node.settings.realtime_priority
+    if priority > 1:
+        # the executor thread stamps a command's arrival: one below the physics, so a
+        # busy machine does not delay commands past setpoint_delay either
+        problem = scheduling.set_current_thread_priority(priority - 1)
+        if problem:
+            node.get_logger().warning(f'realtime_priority: {problem}; the executor thread '
+                                      'keeps ordinary scheduling')
+        else:
+            node.get_logger().info(f'executor thread at SCHED_FIFO priority {priority - 1}')
     s, c = node.settings, node.engine.config
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '

@@ -1,6 +1,7 @@
 """The profile publisher, the Rerun logger and the main job, as real processes."""
 
 import hashlib
+import os
 import signal
 import subprocess
 import sys
@@ -51,6 +52,8 @@ def test_profile_publisher_waits_streams_the_profile_and_exits(ros_processes, ro
     ros_node.spin_for(0.3)
     assert pub.returncode == 0
     assert 'start: streaming eq26' in pub.output and 'end: published 201 samples' in pub.output
+    if os.geteuid() == 0:                                # permitted: real-time priority
+        assert 'streaming at SCHED_FIFO priority 50' in pub.output
     values = [m.data for m in got]
     assert len(values) == 201
     expected = [eq26(k / 100.0, T=0.5)[0] for k in range(201)]   # MODEL.md, sample k
@@ -108,6 +111,8 @@ def test_profile_publisher_holds_or_loops_when_asked(ros_processes, ros_node, re
     ({'profile': 'table'}, 'table_file'),
     ({'profile': 'eq26', 'period': -1.0}, 'period'),
     ({'rate': 0.0}, 'rate must be > 0'),
+    ({'realtime_priority': 100}, 'realtime_priority'),
+    ({'realtime_priority': 5.0}, 'realtime_priority'),
 ])
 def test_profile_publisher_refuses_bad_parameters(ros_processes, params, reason):
     proc = ros_processes.start_console_script('profile_publisher', *ros_arguments(
