@@ -367,6 +367,31 @@ class OmegaSetpointShaper:
         omegas = w2 + np.concatenate(([0.0], np.cumsum(rates * h)))
         return d2 + tau, omegas
 
+    def ramp_to(self, target: float, time: float) -> Ramp:
+        """From ``time`` (s) on, go to ``target`` (rad/s) at the limit; return the ramp.
+
+        Not a setpoint (:attr:`setpoint` stays the latest one received): w leaves
+        whatever path it was on at ``time`` (w continuous, w' bounded by the limit),
+        changes linearly at exactly the limit and holds ``target`` from the end on.
+        The stream is taken as ended: the next setpoint starts a new one, reached
+        ``delay`` after it arrives (not placed on the old grid, whose extrapolation
+        this ramp has left). The engine's command-timeout spin-down (target 0) is
+        this ramp.
+        """
+        w_target, t = _omega('target', target), finite_number('time', time)
+        t = max(t, self._ramps[0].start)
+        self._envelope.clear()
+        self._recent.clear()
+        w0 = self.omega(t)
+        while len(self._ramps) > 1 and self._ramps[-1].start >= t:
+            self._ramps.pop()
+        times = [t, t + abs(w_target - w0) / self.max_angular_acceleration]
+        omegas = [w0, w_target]
+        _within_limit(times, omegas, self.max_angular_acceleration)
+        ramp = Ramp(tuple(times), tuple(omegas))
+        self._ramps.append(ramp)
+        return ramp
+
     def forget_before(self, t: float) -> None:
         """Drop ramps that ended before time ``t`` (s); keeps memory bounded."""
         i = max(0, bisect_right(self._ramps, t, key=_start) - 1)

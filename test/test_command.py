@@ -228,3 +228,31 @@ def test_a_stream_that_stops_mid_ramp_ends_at_its_last_setpoint():
     # ... and came back to the last setpoint, where it holds
     settled = t > 299 * T + 0.05 + sh.max_stall + 0.05 + 1e-9
     assert np.all(w[settled] == pytest.approx(last, abs=1e-12))
+
+
+def test_ramp_to_leaves_the_path_at_its_time_and_goes_linearly_at_the_limit():
+    a = 0.3
+    sh = OmegaSetpointShaper(2.0, delay=0.05)
+    stream(sh, lambda t: a * t, 300)                 # stops; w goes on at the slope
+    w1 = sh.omega(3.2)                               # mid-extrapolation
+    ramp = sh.ramp_to(0.0, 3.2)
+    assert ramp.start == 3.2 and ramp.end == pytest.approx(3.2 + w1 / 2.0, rel=1e-12)
+    assert sh.setpoint == pytest.approx(a * 2.99)    # not a setpoint: the stream's is kept
+    t = np.linspace(3.2, ramp.end, 1001)
+    w, wd = sample(sh, t[:-1])
+    assert np.max(np.abs(w - (w1 - 2.0 * (t[:-1] - 3.2)))) < 1e-12      # w1 - a (t - t1)
+    assert np.all(wd == pytest.approx(-2.0, rel=1e-12))
+    assert sh.omega(ramp.end) == 0.0 and sh.omega(ramp.end + 10) == 0.0
+    assert sh.omega_dot(ramp.end + 10) == 0.0
+    before = np.array([sh.omega(x) for x in np.linspace(2.0, 3.2, 501)])
+    assert np.max(np.abs(np.diff(before))) <= 2.0 * 1.2 / 500 * (1 + 1e-9)   # continuous
+    # the stream has ended: a setpoint after it starts a new one, from the ramp's w
+    w_then = sh.omega(3.3)
+    sh.command(1.0, 3.3)
+    assert sh.omega(3.3) == w_then
+    assert sh.target_reached_at == pytest.approx(3.3 + (1.0 - w_then) / 2.0, rel=1e-12)
+    t = np.linspace(3.2, 6.0, 28001)
+    w, wd = sample(sh, t)
+    assert np.max(np.abs(wd)) <= 2.0 + 1e-12
+    assert np.max(np.abs(np.diff(w))) <= 2.0 * (t[1] - t[0]) * (1 + 1e-9)
+    assert w[-1] == 1.0
