@@ -6,6 +6,9 @@ Node ``rotrod_simulator``. All names below are relative to the node's namespace
 Subscriptions:
   cmd/omega   std_msgs/Float64   angular-velocity setpoint, rad/s (drive = velocity)
   cmd/torque  std_msgs/Float64   hub torque, N m (drive = torque; free rotation)
+  With command_timeout > 0 s, when no command has been accepted on the active one for
+  that long (simulated time), velocity drive ramps w to 0 at max_angular_acceleration
+  and torque drive sets the torque to 0; /diagnostics WARN until a command comes.
 Publications (every 1/publish_rate of simulated time):
   joint_states    sensor_msgs/JointState       joint 'hub': theta rad, w rad/s, torque N m
   tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating)
@@ -129,6 +132,7 @@ class SimulatorNode(Node):
         self._samples_since_marker = 0
         self._trail: deque = deque(maxlen=max(1, self.settings.marker_trail_length))
         self._last_level: int | None = None
+        self._timeouts_logged = 0
         self._next_diagnostics = 0.0
         prefix = self.settings.frame_prefix
         self._rotor_frame, self._world_frame = prefix + 'rotor', prefix + 'world'
@@ -249,19 +253,46 @@ class SimulatorNode(Node):
     # and a rejection on one topic must not silence the other's.
     def _on_omega(self, msg: Float64) -> None:
         with self._lock:
+            timed_out = self.engine.timed_out_at is not None
             try:
                 self.engine.command_omega(msg.data, at=self._command_time())
             except CommandRejected as exc:
                 self.get_logger().warning(f'cmd/omega rejected: {exc}',
                                           throttle_duration_sec=1.0)
+                return
+            if timed_out:
+                self.get_logger().info('cmd/omega: commands again after the command timeout',
+                                       throttle_duration_sec=1.0)
 
     def _on_torque(self, msg: Float64) -> None:
         with self._lock:
+            timed_out = self.engine.timed_out_at is not None
             try:
                 self.engine.command_torque(msg.data, at=self._command_time())
             except CommandRejected as exc:
                 self.get_logger().warning(f'cmd/torque rejected: {exc}',
                                           throttle_duration_sec=1.0)
+                return
+            if timed_out:
+                self.get_logger().info('cmd/torque: commands again after the command timeout',
+                                       throttle_duration_sec=1.0)
+
+    def _log_timeout(self) -> None:
+        """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""
+        eng = self.engine
+        if eng.timeouts == self._timeouts_logged:
+            return
+        self._timeouts_logged = eng.timeouts
+        if eng.timed_out_at is None:       # already over (a halt and a reset since)
+            return
+        cfg = eng.config
+        action = (f'spinning down to 0 at max_angular_acceleration '
+                  f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
+                  else 'hub torque set to 0 (free coast)')
+        topic = 'cmd/omega' if cfg.drive == 'velocity' else 'cmd/torque'
+        self.get_logger().warning(
+            f'no command on {topic} for {cfg.command_timeout:g} s (command_timeout) at '
+            f'simulated time {eng.timed_out_at:.3f} s: {action}', throttle_duration_sec=1.0)
 
     # ----------------------------------------------------------------- services
     def _restart_clock(self) -> None:
@@ -364,6 +395,7 @@ class SimulatorNode(Node):
                 self._countdown = self._publish_steps
                 if not pacer.paced:
                     break
+        self._log_timeout()
         wake = None
         if pacer.paced and not eng.halted:
             wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
