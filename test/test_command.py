@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rotrod_core.command import LowerEnvelope, OmegaSetpointShaper
+from rotrod_core.command import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
 
 T = 0.01
 
@@ -256,3 +256,17 @@ def test_ramp_to_leaves_the_path_at_its_time_and_goes_linearly_at_the_limit():
     assert np.max(np.abs(wd)) <= 2.0 + 1e-12
     assert np.max(np.abs(np.diff(w))) <= 2.0 * (t[1] - t[0]) * (1 + 1e-9)
     assert w[-1] == 1.0
+
+
+def test_a_10_khz_stream_keeps_its_ramps_small():
+    """Each ramp holds its extrapolated path: at most MAX_PATH_SEGMENTS knots of plain
+    floats, whatever the stream's rate (a 10 kHz stream once held ~60 kB per ramp)."""
+    sh = OmegaSetpointShaper(10.0)
+    ramps = [sh.command(0.5 + 0.2 * math.sin(k * 1e-4), k * 1e-4) for k in range(3000)]
+    assert sh.interval == pytest.approx(1e-4, rel=1e-6)
+    assert max(len(r.times) for r in ramps) <= MAX_PATH_SEGMENTS + 3
+    assert any(len(r.times) > 10 for r in ramps)     # the paths are there
+    assert all(type(x) is float for r in ramps[-10:] for x in r.times + r.omegas)
+    t = np.linspace(0.1, 0.29, 2001)                  # and w still follows the stream
+    w, _ = sample(sh, t)
+    assert np.max(np.abs(w - (0.5 + 0.2 * np.sin(t - sh.delay)))) < 1e-6
