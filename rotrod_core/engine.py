@@ -224,6 +224,7 @@ class SimulationEngine:
         self._stepper = self._make_stepper(self.config, self.config.initial_state)
         self.halted: str | None = None
         self.rejected_commands = 0
+        self.accepted_commands = 0
         self.timeouts = 0
         """Number of command-timeout events so far (see :attr:`timed_out_at`)."""
         self._reset_commands()
@@ -384,6 +385,7 @@ class SimulationEngine:
         """A command taking effect at time ``t`` was accepted: it restarts the timeout."""
         self._last_command = max(self._last_command, t)
         self.timed_out_at = None
+        self.accepted_commands += 1
 
     def _check_timeout(self, t0: float, dt: float) -> None:
         """Start a timeout event if the command timeout runs out in the step from ``t0``.
@@ -529,6 +531,7 @@ class SimulationEngine:
                   ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
                   ('coupling', cfg.coupling),
                   *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
+                  ('accepted_commands', self.accepted_commands),
                   ('rejected_commands', self.rejected_commands),
                   ('command_timeout_s', cfg.command_timeout),
                   ('command_age_s', self.command_age), ('command_timeouts', self.timeouts))
