@@ -446,7 +446,7 @@ class SimulationEngine:
         self._steps += 1
         self._torque = stepper.torque
         self._omega_dot = stepper.omega_dot
-        if self._steps % 256 == 0:
+        if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
             self._shaper.forget_before(self.time)
         return True
 

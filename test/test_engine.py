@@ -381,3 +381,12 @@ def test_bad_command_timeouts_are_refused_with_a_reason(value, match):
     assert EngineConfig(command_timeout=0.3, setpoint_delay=0.15).command_timeout == 0.3
     with pytest.raises(ValueError, match='shorter than'):
         EngineConfig(command_timeout=0.3, setpoint_delay=0.2)
+
+
+def test_a_10_khz_stream_keeps_few_ramps_in_memory():
+    eng = SimulationEngine()
+    for k in range(20000):                     # 2 s of setpoints every 0.1 ms
+        eng.advance_to(k * 1e-4)
+        eng.command_omega(0.3 * math.sin(k * 1e-4), at=k * 1e-4)
+    # past ramps are dropped every 32 steps; those ahead span the 0.05 s delay
+    assert len(eng._shaper._ramps) <= 0.032 * 1e4 + 0.05 * 1e4 + 10
