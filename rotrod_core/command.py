@@ -341,6 +341,12 @@ class OmegaSetpointShaper:
             omegas += path[1][after].tolist()
             times.append(times[-1] + max(self.delay, abs(omegas[-1] - w_set) / limit))
             omegas.append(w_set)
+        elif target != w_set:
+            # late, and the extrapolation cannot be followed (w too far from it for the
+            # limit, or past its end): still, a stream that stops ends at its last
+            # setpoint, so w returns to it unless a later one comes
+            times.append(end + max(self.delay, abs(target - w_set) / limit))
+            omegas.append(w_set)
         _within_limit(times, omegas, limit)
         ramp = Ramp(tuple(times), tuple(omegas))
         self._ramps.append(ramp)

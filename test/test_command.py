@@ -270,3 +270,21 @@ def test_a_10_khz_stream_keeps_its_ramps_small():
     t = np.linspace(0.1, 0.29, 2001)                  # and w still follows the stream
     w, _ = sample(sh, t)
     assert np.max(np.abs(w - (0.5 + 0.2 * np.sin(t - sh.delay)))) < 1e-6
+
+
+@pytest.mark.parametrize('jump, arrival', [(2.0, 3.2), (0.5, 3.2), (0.9, 3.4)])
+def test_a_late_last_setpoint_is_where_w_ends(jump, arrival):
+    """A setpoint arriving after its due time rejoins the stream's extrapolation; when
+    the limit does not let w reach it within an interval (a jump up or down), w still
+    ends at that setpoint if no later one comes (it used to hold the extrapolated
+    value: 3.6 rad/s for a last setpoint of 2). The last case is on the extrapolation."""
+    limit = 10.0
+    sh = OmegaSetpointShaper(limit, delay=0.05)
+    stream(sh, lambda t: 0.3 * t, 300)               # stops at 0.897 rad/s, slope 0.3
+    sh.command(jump, arrival)                        # late: due at 3.0 + 0.05 s
+    assert sh.late_setpoints == 1
+    t = np.linspace(arrival, arrival + 3.0, 30001)
+    w, wd = sample(sh, t)
+    assert np.max(np.abs(wd)) <= limit + 1e-9
+    assert np.max(np.abs(np.diff(w))) <= limit * (t[1] - t[0]) * (1 + 1e-9)
+    assert sh.omega(arrival + 3.0) == jump and sh.setpoint == jump
