@@ -37,8 +37,10 @@ from .checks import finite_number
 MIN_STREAM = 10
 """Arrivals after which a stream is established: its slope is extrapolated when late."""
 
-MAX_PATH_SEGMENTS = 1000
-"""Most segments of an extrapolated path (one per interval, fewer for a fast stream)."""
+MAX_PATH_SEGMENTS = 50
+"""Most segments of an extrapolated path (one per interval, fewer for a stream faster than
+100 Hz). Every ramp of a stream holds its path, and a fast stream keeps a ramp per
+setpoint for the delay ahead: with 1000 segments a 10 kHz stream held ~160 MB of them."""
 
 MAX_OMEGA = 1e300
 """Largest |w| accepted as a setpoint or initial speed, rad/s: w and its differences
@@ -335,9 +337,15 @@ class OmegaSetpointShaper:
             # no later setpoint yet: follow the stream's extrapolation for up to
             # max_stall, then return to this setpoint
             after = path[0] > end
-            times += list(path[0][after])
-            omegas += list(path[1][after])
+            times += path[0][after].tolist()
+            omegas += path[1][after].tolist()
             times.append(times[-1] + max(self.delay, abs(omegas[-1] - w_set) / limit))
+            omegas.append(w_set)
+        elif target != w_set:
+            # late, and the extrapolation cannot be followed (w too far from it for the
+            # limit, or past its end): still, a stream that stops ends at its last
+            # setpoint, so w returns to it unless a later one comes
+            times.append(end + max(self.delay, abs(target - w_set) / limit))
             omegas.append(w_set)
         _within_limit(times, omegas, limit)
         ramp = Ramp(tuple(times), tuple(omegas))
@@ -366,6 +374,31 @@ class OmegaSetpointShaper:
         rates = np.clip(slope + curvature * (tau[1:] - 0.5 * h), -limit, limit)
         omegas = w2 + np.concatenate(([0.0], np.cumsum(rates * h)))
         return d2 + tau, omegas
+
+    def ramp_to(self, target: float, time: float) -> Ramp:
+        """From ``time`` (s) on, go to ``target`` (rad/s) at the limit; return the ramp.
+
+        Not a setpoint (:attr:`setpoint` stays the latest one received): w leaves
+        whatever path it was on at ``time`` (w continuous, w' bounded by the limit),
+        changes linearly at exactly the limit and holds ``target`` from the end on.
+        The stream is taken as ended: the next setpoint starts a new one, reached
+        ``delay`` after it arrives (not placed on the old grid, whose extrapolation
+        this ramp has left). The engine's command-timeout spin-down (target 0) is
+        this ramp.
+        """
+        w_target, t = _omega('target', target), finite_number('time', time)
+        t = max(t, self._ramps[0].start)
+        self._envelope.clear()
+        self._recent.clear()
+        w0 = self.omega(t)
+        while len(self._ramps) > 1 and self._ramps[-1].start >= t:
+            self._ramps.pop()
+        times = [t, t + abs(w_target - w0) / self.max_angular_acceleration]
+        omegas = [w0, w_target]
+        _within_limit(times, omegas, self.max_angular_acceleration)
+        ramp = Ramp(tuple(times), tuple(omegas))
+        self._ramps.append(ramp)
+        return ramp
 
     def forget_before(self, t: float) -> None:
         """Drop ramps that ended before time ``t`` (s); keeps memory bounded."""

@@ -42,6 +42,11 @@ STEP_RESOLUTION = 0.5
 per radian of that mode ~ (dt |lambda|)^4 / 120, here below 0.06 %)."""
 
 
+TIMEOUT_DELAYS = 2.0
+"""Shortest command_timeout, in units of setpoint_delay: the delay plus two stream
+intervals, since setpoint_delay is at least two intervals."""
+
+
 class CommandRejected(ValueError):
     """A command was refused (reason in the message); the simulation is unchanged."""
 
@@ -82,6 +87,14 @@ class EngineConfig:
             does not reach w (see :class:`~rotrod_core.command.OmegaSetpointShaper`).
         initial: initial state by name (u, v, du, dv, theta, omega), as
             ``(name, value)`` pairs or a dict; others zero. Used at start and reset.
+        command_timeout: simulated seconds without an accepted command on the active
+            drive's input after which the hub is stopped (0 = off): velocity drive
+            ramps w to 0 at ``max_angular_acceleration``, torque drive sets the hub
+            torque to 0 (free coast); health is WARN until a command comes. Off, w
+            holds the last setpoint and the torque stays. When on, it must be at
+            least :data:`TIMEOUT_DELAYS` x ``setpoint_delay`` (the delay plus at least
+            two stream intervals, since the delay is at least two): a normal stream
+            never trips it. See :meth:`SimulationEngine.step`.
     """
 
     params: RodParams = field(default_factory=RodParams)
@@ -96,6 +109,7 @@ class EngineConfig:
     critical_margin: float = 0.05
     setpoint_delay: float = 0.05
     initial: tuple = ()
+    command_timeout: float = 0.0
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -116,6 +130,15 @@ class EngineConfig:
         if not 0 < finite_number('setpoint_delay', self.setpoint_delay) <= 10:
             raise ValueError(f'setpoint_delay must be in (0, 10] s, got '
                              f'{self.setpoint_delay!r}')
+        timeout = finite_number('command_timeout', self.command_timeout, nonnegative=True)
+        set_(self, 'command_timeout', timeout)
+        if 0 < timeout < TIMEOUT_DELAYS * self.setpoint_delay:
+            raise ValueError(
+                f'command_timeout {timeout:g} s is shorter than {TIMEOUT_DELAYS:g} x '
+                f'setpoint_delay ({TIMEOUT_DELAYS * self.setpoint_delay:g} s): a setpoint '
+                'is reached setpoint_delay after it arrives and the next one is due '
+                'within two stream intervals of that, so a normal stream would trip it '
+                '(0 turns the timeout off)')
         if self.critical_margin >= 1:
             raise ValueError(f'critical_margin must be in [0, 1), got {self.critical_margin!r}')
         rate = fastest_rate(self.params, self.max_omega)
@@ -201,6 +224,9 @@ class SimulationEngine:
         self._stepper = self._make_stepper(self.config, self.config.initial_state)
         self.halted: str | None = None
         self.rejected_commands = 0
+        self.accepted_commands = 0
+        self.timeouts = 0
+        """Number of command-timeout events so far (see :attr:`timed_out_at`)."""
         self._reset_commands()
         self._cache_limits()
 
@@ -222,6 +248,12 @@ class SimulationEngine:
         self._torque = (0.0 if cfg.drive == 'torque' else
                         float(model.hub_torque(st.coefficients, st.state, 0.0, st.coupling)))
         self._omega_dot = 0.0
+        self._restart_timer()
+
+    def _restart_timer(self) -> None:
+        """The command timeout counts from now; a timeout event in course ends."""
+        self._last_command = self.time
+        self.timed_out_at: float | None = None
 
     def _cache_limits(self) -> None:
         p, cfg = self.config.params, self.config
@@ -268,6 +300,11 @@ class SimulationEngine:
     def setpoint(self) -> float:
         """Latest accepted angular-velocity setpoint, rad/s (velocity drive)."""
         return self._shaper.setpoint
+
+    @property
+    def command_age(self) -> float:
+        """Simulated time since the latest accepted command (or the timer's restart), s."""
+        return max(0.0, self.time - self._last_command)
 
     @property
     def deflection(self) -> float:
@@ -333,6 +370,7 @@ class SimulationEngine:
             self._shaper.command(w, t)
         except ValueError as exc:       # beyond what the shaper can represent
             self._reject(str(exc))
+        self._accepted(t)
 
     def command_torque(self, torque, at=None) -> None:
         """Hub torque (N m) from time ``at`` (s) on; torque drive."""
@@ -341,6 +379,37 @@ class SimulationEngine:
         if self._torque_schedule and self._torque_schedule[-1][0] > t:
             t = self._torque_schedule[-1][0]
         self._torque_schedule.append((t, q))
+        self._accepted(t)
+
+    def _accepted(self, t: float) -> None:
+        """A command taking effect at time ``t`` was accepted: it restarts the timeout."""
+        self._last_command = max(self._last_command, t)
+        self.timed_out_at = None
+        self.accepted_commands += 1
+
+    def _check_timeout(self, t0: float, dt: float) -> None:
+        """Start a timeout event if the command timeout runs out in the step from ``t0``.
+
+        Velocity drive: w ramps to 0 at the acceleration limit from the instant the
+        timeout runs out (through the setpoint shaper, so w is continuous and |w'|
+        bounded). Torque drive: the torque is 0 from this step on (commands apply at
+        step instants too).
+        """
+        timeout = self.config.command_timeout
+        if not timeout or self.timed_out_at is not None:
+            return
+        deadline = self._last_command + timeout
+        if self.config.drive == 'velocity':
+            if deadline > t0 + dt:
+                return
+            self.timed_out_at = max(deadline, t0)
+            self._shaper.ramp_to(0.0, self.timed_out_at)
+        else:
+            if deadline > t0 + 0.5 * dt:
+                return
+            self.timed_out_at = t0
+            self.torque_command = 0.0
+        self.timeouts += 1
 
     # ----------------------------------------------------------------- stepping
     def step(self) -> bool:
@@ -350,6 +419,7 @@ class SimulationEngine:
         stepper, cfg, dt = self._stepper, self.config, self.config.dt
         before = stepper.state
         t0 = self.time
+        self._check_timeout(t0, dt)
         try:
             if cfg.drive == 'velocity':
                 omega_dot = (self._shaper.omega(t0 + dt) - before.omega) / dt
@@ -376,7 +446,7 @@ class SimulationEngine:
         self._steps += 1
         self._torque = stepper.torque
         self._omega_dot = stepper.omega_dot
-        if self._steps % 256 == 0:
+        if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
             self._shaper.forget_before(self.time)
         return True
 
@@ -411,7 +481,10 @@ class SimulationEngine:
         """Switch to ``config`` (already validated), keeping the state and the clock.
 
         A change of drive starts the new drive from the current motion: velocity
-        drive holds the current w, torque drive starts with zero torque.
+        drive holds the current w, torque drive starts with zero torque. A change of
+        drive, ``max_angular_acceleration``, ``setpoint_delay`` or ``command_timeout``
+        restarts the command timeout and ends a timeout event in course (velocity
+        drive then holds the w reached; torque drive keeps zero torque).
         """
         if not isinstance(config, EngineConfig):
             raise ValueError(f'config must be an EngineConfig, got {config!r}')
@@ -425,6 +498,10 @@ class SimulationEngine:
                 or config.max_angular_acceleration != old.max_angular_acceleration
                 or config.setpoint_delay != old.setpoint_delay):
             self._reset_commands()
+        elif config.command_timeout != old.command_timeout:
+            if self.timed_out_at is not None and config.drive == 'velocity':
+                self._shaper.ramp_to(self._shaper.omega(time), time)    # hold w here
+            self._restart_timer()
         self._cache_limits()
 
     # ----------------------------------------------------------------- health
@@ -443,7 +520,8 @@ class SimulationEngine:
         """The session's health level and its reason.
 
         ERROR when halted; WARN when the deflection is above ``warn_fraction`` of the
-        limit, |w| is near a critical speed, or w is in an unstable range; else OK.
+        limit, |w| is near a critical speed, w is in an unstable range, or the command
+        timeout has run out (until a command comes); else OK.
         """
         cfg, s = self.config, self.state
         r = self.deflection
@@ -453,10 +531,22 @@ class SimulationEngine:
                   ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
                   ('coupling', cfg.coupling),
                   *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
-                  ('rejected_commands', self.rejected_commands))
+                  ('accepted_commands', self.accepted_commands),
+                  ('rejected_commands', self.rejected_commands),
+                  ('command_timeout_s', cfg.command_timeout),
+                  ('command_age_s', self.command_age), ('command_timeouts', self.timeouts))
         if self.halted:
             return Health(ERROR, self.halted, values)
         warnings = []
+        if self.timed_out_at is not None:
+            if cfg.drive == 'torque':
+                action = 'hub torque 0, coasting'
+            elif self._shaper.target_reached_at > self.time:
+                action = 'spinning down'
+            else:
+                action = 'spun down, at rest'
+            warnings.append(f'no command for {self.command_age:.3g} s (command_timeout '
+                            f'{cfg.command_timeout:g} s): {action}')
         if r > cfg.warn_fraction * cfg.deflection_limit:
             warnings.append(f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
                             f'the {cfg.deflection_limit * 1e3:.3g} mm limit')

@@ -89,6 +89,12 @@ ENGINE_SPECS = (
          'lag of w behind the cmd/omega stream, s (at least two stream intervals); '
          'absorbs delivery jitter up to the lag minus one interval (raise it at a high '
          'real_time_factor)', 0.0, 10.0),
+    Spec('command_timeout', _ENGINE.command_timeout,
+         'simulated seconds without an accepted command on the active drive\'s topic '
+         'after which the hub is stopped: velocity drive ramps w to 0 at '
+         'max_angular_acceleration, torque drive sets the torque to 0 (coast); '
+         'diagnostics WARN until a command comes. 0 = off (w holds the last setpoint, '
+         'the torque stays); else >= 2 x setpoint_delay, s', 0.0, 86400.0),
     *(Spec(f'initial.{name}', 0.0,
            f'initial {name} ({unit}) at start and after ~/reset')
       for name, unit in zip(STATE_FIELDS, ('m', 'm', 'm/s', 'm/s', 'rad', 'rad/s'))),

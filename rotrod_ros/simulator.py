@@ -6,6 +6,9 @@ Node ``rotrod_simulator``. All names below are relative to the node's namespace
 Subscriptions:
   cmd/omega   std_msgs/Float64   angular-velocity setpoint, rad/s (drive = velocity)
   cmd/torque  std_msgs/Float64   hub torque, N m (drive = torque; free rotation)
+  With command_timeout > 0 s, when no command has been accepted on the active one for
+  that long (simulated time), velocity drive ramps w to 0 at max_angular_acceleration
+  and torque drive sets the torque to 0; /diagnostics WARN until a command comes.
 Publications (every 1/publish_rate of simulated time):
   joint_states    sensor_msgs/JointState       joint 'hub': theta rad, w rad/s, torque N m
   tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating)
@@ -25,7 +28,10 @@ Physics runs in its own thread at a fixed step (under SCHED_FIFO at
 ``realtime_priority`` where the system permits); each tick integrates in whole steps
 up to the simulated time due now (``real_time_factor`` x wall time), so simulated
 time does not drift from the clock. The ROS executor only handles commands,
-services and parameters. The physics is rotrod_core's :class:`SimulationEngine`.
+services and parameters; a command is queued with its arrival time and applied by
+the physics thread, between ticks, at the simulated instant it arrived (so a flood
+of commands cannot hold the physics off). The physics is rotrod_core's
+:class:`SimulationEngine`.
 """
 
 from __future__ import annotations
@@ -69,6 +75,14 @@ MAX_BACKLOG = 1.0
 COMMAND_QOS_DEPTH = 1000
 """Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
 must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
+PENDING_COMMANDS = COMMAND_QOS_DEPTH
+"""Commands received but not yet applied, at most; beyond, the oldest is dropped (and
+counted). The physics thread applies them between ticks: only a sender faster than
+it can apply them fills this."""
+TICK_COMMAND_BUDGET = 0.001
+"""Wall seconds a tick spends at most on commands still queued at its start (normally
+none: they are applied between ticks as they come), so that the publication it
+computes stays on time."""
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
 LEAD = 0.002
@@ -134,6 +148,11 @@ class SimulatorNode(Node):
         self._samples_since_marker = 0
         self._trail: deque = deque(maxlen=max(1, self.settings.marker_trail_length))
         self._last_level: int | None = None
+        self._timeouts_logged = 0
+        self._commands: deque = deque(maxlen=PENDING_COMMANDS)   # (topic, value, wall time)
+        self._command_arrived = threading.Event()
+        self.dropped_commands = 0
+        self._drops_logged = 0
         self._next_diagnostics = 0.0
         prefix = self.settings.frame_prefix
         self._rotor_frame, self._world_frame = prefix + 'rotor', prefix + 'world'
@@ -187,6 +206,7 @@ class SimulatorNode(Node):
             self.get_logger().warning(f'parameter change rejected: {exc}')
             return SetParametersResult(successful=False, reason=str(exc))
         with self._lock:
+            self._apply_commands()          # those that came before the change, first
             if engine_config != self.engine.config:
                 self.engine.reconfigure(engine_config)
             self._apply_settings(settings)
@@ -229,12 +249,14 @@ class SimulatorNode(Node):
         return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
 
     # ----------------------------------------------------------------- commands
-    def _command_time(self) -> float | None:
-        """Simulated time at which a command arriving now takes effect (None: at once).
+    def _command_time(self, arrived: float) -> float | None:
+        """Simulated time at which a command arrived at ``arrived`` takes effect, or None.
 
-        In real time (factor 1) the simulated time due now. With /clock, senders run
+        ``arrived`` is a monotonic wall time; None means at once (the engine's time).
+
+        In real time (factor 1) the simulated time due then. With /clock, senders run
         on simulated time and see only what was published, so the latest
-        publication's simulated time plus the wall time since it, at the factor: it
+        publication's simulated time plus the wall time from it, at the factor: it
         follows the simulation's actual progress also when the machine cannot keep
         up. Not capped above, since when the physics thread lags, a cap would date a
         run of arrivals early, and the setpoint shaper relies on delivery delays being
@@ -242,31 +264,97 @@ class SimulatorNode(Node):
         """
         if self._paused or self.engine.halted or not self._pacer.paced:
             return None
-        now = time.monotonic()
         if self.settings.publishes_clock:
             sim, wall = self._published
-            at = sim + (now - wall) * self._pacer.factor
+            at = sim + (arrived - wall) * self._pacer.factor
         else:
-            at = self._pacer.sim_time(now)
+            at = self._pacer.sim_time(arrived)
         return at
 
-    # Two callbacks, not one shared helper: rclpy throttles a log call per call site,
-    # and a rejection on one topic must not silence the other's.
+    def _queue(self, topic: str, value: float) -> None:
+        """Queue a command with its arrival time (executor thread; no lock, O(1))."""
+        if len(self._commands) == PENDING_COMMANDS:
+            self.dropped_commands += 1               # the deque drops the oldest
+        self._commands.append((topic, value, time.monotonic()))
+        self._command_arrived.set()
+
     def _on_omega(self, msg: Float64) -> None:
-        with self._lock:
-            try:
-                self.engine.command_omega(msg.data, at=self._command_time())
-            except CommandRejected as exc:
-                self.get_logger().warning(f'cmd/omega rejected: {exc}',
-                                          throttle_duration_sec=1.0)
+        self._queue('omega', msg.data)
 
     def _on_torque(self, msg: Float64) -> None:
-        with self._lock:
-            try:
-                self.engine.command_torque(msg.data, at=self._command_time())
-            except CommandRejected as exc:
-                self.get_logger().warning(f'cmd/torque rejected: {exc}',
-                                          throttle_duration_sec=1.0)
+        self._queue('torque', msg.data)
+
+    def _apply_commands(self, deadline: float | None = None) -> None:
+        """Apply queued commands in order, until none is left or monotonic ``deadline``.
+
+        Called with the lock held. Each takes effect at the simulated time it arrived.
+        """
+        commands = self._commands
+        n = 0
+        while commands:
+            if deadline is not None and n % 8 == 0 and time.monotonic() >= deadline:
+                break
+            n += 1
+            topic, value, arrived = commands.popleft()
+            # two call sites, one per topic: rclpy throttles a log call per call site,
+            # and a rejection on one topic must not silence the other's
+            timed_out = self.engine.timed_out_at is not None
+            at = self._command_time(arrived)
+            if topic == 'omega':
+                try:
+                    self.engine.command_omega(value, at=at)
+                except CommandRejected as exc:
+                    self.get_logger().warning(f'cmd/omega rejected: {exc}',
+                                              throttle_duration_sec=1.0)
+                    continue
+            else:
+                try:
+                    self.engine.command_torque(value, at=at)
+                except CommandRejected as exc:
+                    self.get_logger().warning(f'cmd/torque rejected: {exc}',
+                                              throttle_duration_sec=1.0)
+                    continue
+            if timed_out:
+                self.get_logger().info(f'cmd/{topic}: commands again after the command '
+                                       'timeout', throttle_duration_sec=1.0)
+        if self.dropped_commands != self._drops_logged:
+            self.get_logger().warning(
+                f'commands arrive faster than they can be applied: '
+                f'{self.dropped_commands} dropped so far (the oldest of '
+                f'{PENDING_COMMANDS} pending)', throttle_duration_sec=1.0)
+            self._drops_logged = self.dropped_commands
+
+    def _idle_until(self, wake: float) -> bool:
+        """Apply commands as they come until monotonic time ``wake``; False if stopping."""
+        event = self._command_arrived
+        while not self._stop.is_set():
+            left = wake - time.monotonic()
+            if left <= 0:
+                return True
+            event.clear()
+            if self._commands:
+                with self._lock:
+                    self._apply_commands(deadline=wake)
+            else:
+                event.wait(left)
+        return False
+
+    def _log_timeout(self) -> None:
+        """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""
+        eng = self.engine
+        if eng.timeouts == self._timeouts_logged:
+            return
+        self._timeouts_logged = eng.timeouts
+        if eng.timed_out_at is None:       # already over (a halt and a reset since)
+            return
+        cfg = eng.config
+        action = (f'spinning down to 0 at max_angular_acceleration '
+                  f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
+                  else 'hub torque set to 0 (free coast)')
+        topic = 'cmd/omega' if cfg.drive == 'velocity' else 'cmd/torque'
+        self.get_logger().warning(
+            f'no command on {topic} for {cfg.command_timeout:g} s (command_timeout) at '
+            f'simulated time {eng.timed_out_at:.3f} s: {action}', throttle_duration_sec=1.0)
 
     # ----------------------------------------------------------------- services
     def _restart_clock(self) -> None:
@@ -279,6 +367,8 @@ class SimulatorNode(Node):
 
     def _on_reset(self, request, response):
         with self._lock:
+            # commands that came before the reset are superseded by it
+            self._commands.clear()
             was_halted = self.engine.halted
             self.engine.reset()
             self._trail.clear()
@@ -320,6 +410,7 @@ class SimulatorNode(Node):
     def stop(self) -> None:
         """Stop the physics thread (returns when it has ended)."""
         self._stop.set()
+        self._command_arrived.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
 
@@ -370,6 +461,7 @@ class SimulatorNode(Node):
                 self._countdown = self._publish_steps
                 if not pacer.paced:
                     break
+        self._log_timeout()
         wake = None
         if pacer.paced and not eng.halted:
             wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
@@ -399,6 +491,7 @@ class SimulatorNode(Node):
             while not self._stop.is_set():
                 self._schedule()
                 with self._lock:
+                    self._apply_commands(deadline=time.monotonic() + TICK_COMMAND_BUDGET)
                     samples, wake = self._tick()
                     # what the samples were computed with, also if a service or a
                     # parameter change replaces it while they are being published
@@ -412,9 +505,8 @@ class SimulatorNode(Node):
                 self._publish_diagnostics()
                 # the next tick is due at an absolute time: the publication's wait and
                 # the work after it (estimate, diagnostics) must not delay it
-                wait = None if wake is None else wake - time.monotonic()
-                if wait is not None and wait > 0:
-                    self._stop.wait(wait)
+                if wake is not None and not self._idle_until(wake):
+                    return
         except Exception as exc:  # report any failure, then stop the physics
             if self._stop.is_set() or not self.context.ok():
                 return
@@ -462,7 +554,8 @@ class SimulatorNode(Node):
             self._next_diagnostics = now + 1.0 / self.settings.diagnostics_rate
             values = (*health.values, ('paused', self._paused),
                       ('real_time_factor', self.settings.real_time_factor),
-                      ('overruns', self._overruns))
+                      ('overruns', self._overruns),
+                      ('dropped_commands', self.dropped_commands))
             stamp = messages.stamp(self._stamps.stamp(self.engine.time))
         self._pub_diagnostics.publish(messages.diagnostics(
             stamp, self._status_name, self.get_fully_qualified_name(), level, message, values))

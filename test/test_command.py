@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rotrod_core.command import LowerEnvelope, OmegaSetpointShaper
+from rotrod_core.command import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
 
 T = 0.01
 
@@ -228,3 +228,63 @@ def test_a_stream_that_stops_mid_ramp_ends_at_its_last_setpoint():
     # ... and came back to the last setpoint, where it holds
     settled = t > 299 * T + 0.05 + sh.max_stall + 0.05 + 1e-9
     assert np.all(w[settled] == pytest.approx(last, abs=1e-12))
+
+
+def test_ramp_to_leaves_the_path_at_its_time_and_goes_linearly_at_the_limit():
+    a = 0.3
+    sh = OmegaSetpointShaper(2.0, delay=0.05)
+    stream(sh, lambda t: a * t, 300)                 # stops; w goes on at the slope
+    w1 = sh.omega(3.2)                               # mid-extrapolation
+    ramp = sh.ramp_to(0.0, 3.2)
+    assert ramp.start == 3.2 and ramp.end == pytest.approx(3.2 + w1 / 2.0, rel=1e-12)
+    assert sh.setpoint == pytest.approx(a * 2.99)    # not a setpoint: the stream's is kept
+    t = np.linspace(3.2, ramp.end, 1001)
+    w, wd = sample(sh, t[:-1])
+    assert np.max(np.abs(w - (w1 - 2.0 * (t[:-1] - 3.2)))) < 1e-12      # w1 - a (t - t1)
+    assert np.all(wd == pytest.approx(-2.0, rel=1e-12))
+    assert sh.omega(ramp.end) == 0.0 and sh.omega(ramp.end + 10) == 0.0
+    assert sh.omega_dot(ramp.end + 10) == 0.0
+    before = np.array([sh.omega(x) for x in np.linspace(2.0, 3.2, 501)])
+    assert np.max(np.abs(np.diff(before))) <= 2.0 * 1.2 / 500 * (1 + 1e-9)   # continuous
+    # the stream has ended: a setpoint after it starts a new one, from the ramp's w
+    w_then = sh.omega(3.3)
+    sh.command(1.0, 3.3)
+    assert sh.omega(3.3) == w_then
+    assert sh.target_reached_at == pytest.approx(3.3 + (1.0 - w_then) / 2.0, rel=1e-12)
+    t = np.linspace(3.2, 6.0, 28001)
+    w, wd = sample(sh, t)
+    assert np.max(np.abs(wd)) <= 2.0 + 1e-12
+    assert np.max(np.abs(np.diff(w))) <= 2.0 * (t[1] - t[0]) * (1 + 1e-9)
+    assert w[-1] == 1.0
+
+
+def test_a_10_khz_stream_keeps_its_ramps_small():
+    """Each ramp holds its extrapolated path: at most MAX_PATH_SEGMENTS knots of plain
+    floats, whatever the stream's rate (a 10 kHz stream once held ~60 kB per ramp)."""
+    sh = OmegaSetpointShaper(10.0)
+    ramps = [sh.command(0.5 + 0.2 * math.sin(k * 1e-4), k * 1e-4) for k in range(3000)]
+    assert sh.interval == pytest.approx(1e-4, rel=1e-6)
+    assert max(len(r.times) for r in ramps) <= MAX_PATH_SEGMENTS + 3
+    assert any(len(r.times) > 10 for r in ramps)     # the paths are there
+    assert all(type(x) is float for r in ramps[-10:] for x in r.times + r.omegas)
+    t = np.linspace(0.1, 0.29, 2001)                  # and w still follows the stream
+    w, _ = sample(sh, t)
+    assert np.max(np.abs(w - (0.5 + 0.2 * np.sin(t - sh.delay)))) < 1e-6
+
+
+@pytest.mark.parametrize('jump, arrival', [(2.0, 3.2), (0.5, 3.2), (0.9, 3.4)])
+def test_a_late_last_setpoint_is_where_w_ends(jump, arrival):
+    """A setpoint arriving after its due time rejoins the stream's extrapolation; when
+    the limit does not let w reach it within an interval (a jump up or down), w still
+    ends at that setpoint if no later one comes (it used to hold the extrapolated
+    value: 3.6 rad/s for a last setpoint of 2). The last case is on the extrapolation."""
+    limit = 10.0
+    sh = OmegaSetpointShaper(limit, delay=0.05)
+    stream(sh, lambda t: 0.3 * t, 300)               # stops at 0.897 rad/s, slope 0.3
+    sh.command(jump, arrival)                        # late: due at 3.0 + 0.05 s
+    assert sh.late_setpoints == 1
+    t = np.linspace(arrival, arrival + 3.0, 30001)
+    w, wd = sample(sh, t)
+    assert np.max(np.abs(wd)) <= limit + 1e-9
+    assert np.max(np.abs(np.diff(w))) <= limit * (t[1] - t[0]) * (1 + 1e-9)
+    assert sh.omega(arrival + 3.0) == jump and sh.setpoint == jump

@@ -233,3 +233,160 @@ def test_bad_configurations_are_refused_with_a_reason(changes, match):
     base = EngineConfig()
     with pytest.raises(ValueError, match=match):
         base.replace(**changes)
+
+
+# -- command timeout ----------------------------------------------------------------------
+
+def stream_then_stop(eng, omega, n, period=0.01):
+    """Setpoints omega(k period) arriving at k period, k < n; returns the last arrival."""
+    for k in range(n):
+        eng.advance_to(k * period)
+        eng.command_omega(omega(k * period), at=k * period)
+    return (n - 1) * period
+
+
+def record(eng, seconds):
+    rows = []
+    for _ in range(round(seconds / eng.dt)):
+        eng.step()
+        rows.append((eng.time, eng.state.omega, eng.omega_dot))
+    return np.array(rows)
+
+
+def test_without_a_command_timeout_w_holds_the_last_setpoint():
+    eng = SimulationEngine(EngineConfig(deflection_limit=0.005))
+    stream_then_stop(eng, lambda t: 0.3 * t, 300)
+    rec = record(eng, 10.0)
+    assert eng.config.command_timeout == 0.0 and eng.timeouts == 0
+    assert np.all(rec[rec[:, 0] > 4.0, 1] == pytest.approx(0.3 * 2.99, abs=1e-12))
+    assert eng.health().level == OK
+
+
+def test_the_command_timeout_spins_w_down_linearly_at_the_acceleration_limit():
+    a, T = 0.5, 0.4
+    eng = SimulationEngine(EngineConfig(deflection_limit=0.005, max_angular_acceleration=a,
+                                        command_timeout=T))
+    last = stream_then_stop(eng, lambda t: 0.3 * t, 300)
+    rec = record(eng, 6.0)
+    t, w, wd = rec.T
+    t_s = last + T                                    # the timeout runs out here
+    assert eng.timed_out_at == pytest.approx(t_s, abs=1e-12) and eng.timeouts == 1
+    w_s = np.interp(t_s, t, w)
+    t_end = t_s + w_s / a                             # closed form: w_s - a (t - t_s) = 0
+    down = (t > t_s + eng.dt) & (t < t_end - eng.dt)
+    assert np.max(np.abs(w[down] - (w_s - a * (t[down] - t_s)))) < 1e-9
+    assert np.all(wd[down] == pytest.approx(-a, rel=1e-9))
+    assert np.max(np.abs(wd)) <= a + 1e-9             # also across its start and end
+    assert np.all(w[t >= t_end + eng.dt] == 0.0)      # ends at 0 and holds it
+    assert np.max(np.abs(np.diff(w))) <= a * eng.dt * (1 + 1e-9)    # no jump
+    h = eng.health()
+    assert h.level == WARN
+    assert 'no command for' in h.message and '(command_timeout 0.4 s): spun down' in h.message
+    values = dict(h.values)
+    assert values['command_timeouts'] == 1 and values['command_age_s'] == pytest.approx(
+        eng.time - last)
+
+
+def test_mid_spin_down_the_health_says_so_and_a_command_resumes():
+    eng = SimulationEngine(EngineConfig(deflection_limit=0.005, command_timeout=0.2))
+    stream_then_stop(eng, lambda t: 0.3 * t, 300)
+    eng.advance_to(3.5)
+    assert eng.health().level == WARN and 'spinning down' in eng.health().message
+    w = eng.state.omega
+    eng.command_omega(1.2)                            # a command comes: back to normal
+    assert eng.timed_out_at is None and eng.health().level == OK
+    for _ in range(300):                              # streamed, so it does not time out
+        eng.advance(10)
+        eng.command_omega(1.2)
+    assert eng.state.omega == 1.2 and w < 1.2 and eng.timeouts == 1
+
+
+def test_the_command_timeout_zeroes_the_torque_and_the_hub_coasts():
+    Q, T = 0.05, 0.3
+    eng = SimulationEngine(EngineConfig(drive='torque', command_timeout=T))
+    for k in range(100):                              # a 100 Hz torque stream for 1 s
+        eng.advance_to(k * 0.01)
+        eng.command_torque(Q, at=k * 0.01)
+    eng.advance_to(0.99 + T - 0.01)
+    assert eng.torque == Q and eng.timed_out_at is None
+    eng.advance_to(0.99 + T + 0.01)
+    assert eng.torque == 0.0 and eng.torque_command == 0.0
+    assert eng.timed_out_at == pytest.approx(0.99 + T, abs=1.5 * eng.dt)
+    h = eng.health()
+    assert h.level == WARN and 'hub torque 0, coasting' in h.message
+    L0, E0 = eng.angular_momentum(), eng.energy()
+    assert L0 == pytest.approx(Q * (0.99 + T), rel=1e-3)      # dL/dt = Q until then
+    for _ in range(5):
+        eng.advance(1000)
+        assert eng.angular_momentum() == pytest.approx(L0, rel=1e-10)   # free: L conserved
+        assert eng.energy() == pytest.approx(E0, rel=1e-9)
+    assert eng.state.omega > 0.1                      # it coasts, it is not braked
+    eng.command_torque(Q)
+    eng.advance(1)
+    assert eng.torque == Q and eng.health().level == OK
+
+
+def test_reset_and_a_change_of_drive_restart_the_command_timer():
+    eng = SimulationEngine(EngineConfig(deflection_limit=0.005, command_timeout=0.5))
+    eng.advance_to(0.4)
+    eng.reset()
+    eng.advance_to(0.8)                               # 0.4 s since the reset
+    assert eng.timed_out_at is None
+    eng.advance_to(0.95)
+    assert eng.timed_out_at is not None and eng.timeouts == 1      # nothing came at all
+    eng.reconfigure(eng.config.replace(drive='torque'))
+    assert eng.timed_out_at is None and eng.command_age == 0.0
+    eng.advance_to(1.4)
+    assert eng.timed_out_at is None
+    eng.advance_to(1.5)
+    assert eng.timeouts == 2
+    eng.reconfigure(eng.config.replace(command_timeout=0.0))      # off: no more events
+    eng.advance(5000)
+    assert eng.timeouts == 2 and eng.health().level == OK
+
+
+def test_switching_the_timeout_off_mid_spin_down_holds_the_w_reached():
+    eng = SimulationEngine(EngineConfig(deflection_limit=0.005, command_timeout=0.2))
+    stream_then_stop(eng, lambda t: 0.3 * t, 300)
+    eng.advance_to(3.6)
+    eng.reconfigure(eng.config.replace(command_timeout=0.0))
+    w = eng.state.omega
+    eng.advance(3000)
+    assert 0.0 < w < 0.9 and eng.state.omega == pytest.approx(w, abs=1e-9)
+    assert eng.health().level == OK
+
+
+def test_a_jittery_100_hz_stream_never_trips_the_shortest_timeout():
+    profile = Eq26Profile()
+    eng = SimulationEngine(EngineConfig(command_timeout=2 * EngineConfig().setpoint_delay))
+    rng = np.random.default_rng(5)
+    last = 0.0
+    for k in range(2001):
+        arrival = last = max(last, k * 0.01 + rng.uniform(0.0, 0.02))
+        eng.advance_to(arrival)
+        eng.command_omega(profile.omega(k * 0.01), at=arrival)
+    assert eng.timeouts == 0 and eng.halted is None
+
+
+@pytest.mark.parametrize('value, match', [
+    (math.nan, 'command_timeout must be finite'),
+    (-1.0, 'command_timeout must be >= 0'),
+    ('soon', 'command_timeout must be a number'),
+    (0.09, r'command_timeout 0.09 s is shorter than 2 x setpoint_delay \(0.1 s\)'),
+])
+def test_bad_command_timeouts_are_refused_with_a_reason(value, match):
+    with pytest.raises(ValueError, match=match):
+        EngineConfig(command_timeout=value)
+    assert EngineConfig(command_timeout=0.1).command_timeout == 0.1
+    assert EngineConfig(command_timeout=0.3, setpoint_delay=0.15).command_timeout == 0.3
+    with pytest.raises(ValueError, match='shorter than'):
+        EngineConfig(command_timeout=0.3, setpoint_delay=0.2)
+
+
+def test_a_10_khz_stream_keeps_few_ramps_in_memory():
+    eng = SimulationEngine()
+    for k in range(20000):                     # 2 s of setpoints every 0.1 ms
+        eng.advance_to(k * 1e-4)
+        eng.command_omega(0.3 * math.sin(k * 1e-4), at=k * 1e-4)
+    # past ramps are dropped every 32 steps; those ahead span the 0.05 s delay
+    assert len(eng._shaper._ramps) <= 0.032 * 1e4 + 0.05 * 1e4 + 10

@@ -493,6 +493,7 @@ def engine_configs(draw):
         'warn_fraction': anything(st.floats(0.1, 1.0)),
         'critical_margin': anything(st.floats(0.0, 0.5)),
         'setpoint_delay': anything(st.floats(0.02, 0.5)),
+        'command_timeout': anything(st.floats(0.0, 1.0)),
     }
     for name, strategy in options.items():
         if draw(st.integers(0, 3)) == 0:
@@ -559,13 +560,14 @@ COMMANDS = st.lists(commands(), min_size=1, max_size=20)
 @props(150)
 @given(rod_fields(sane_only=True, ranges=LAB), st.sampled_from(['velocity', 'torque']),
        st.sampled_from(['exact', 'paper']), st.floats(0.05, 50.0), st.floats(2e-4, 0.05),
-       st.floats(1.0, 50.0), COMMANDS)
+       st.floats(1.0, 50.0), COMMANDS, st.sampled_from([0.0, 0.0, 0.1, 0.25]))
 def test_the_engine_state_stays_finite_or_it_halts_with_a_reason(fields, drive, coupling,
                                                                   accel, limit, max_omega,
-                                                                  commands):
+                                                                  commands, timeout):
     """Any command sequence: accepted, or CommandRejected (counted, nothing changes); the
     state, energy, momentum, torque and frequencies stay finite; in velocity drive |w'|
-    stays within max_angular_acceleration; a halt has a reason and refuses steps."""
+    stays within max_angular_acceleration (command-timeout spin-downs included); a halt
+    has a reason and refuses steps."""
     params = RodParams(**fields)
     if coupling == 'exact' and params.hub_inertia == 0:
         coupling = 'paper'
@@ -576,7 +578,8 @@ def test_the_engine_state_stays_finite_or_it_halts_with_a_reason(fields, drive, 
     try:
         config = EngineConfig(params=params, drive=drive, coupling=coupling,
                               physics_rate=rate, max_angular_acceleration=accel,
-                              deflection_limit=limit, max_omega=max_omega, max_torque=20.0)
+                              deflection_limit=limit, max_omega=max_omega, max_torque=20.0,
+                              command_timeout=timeout)
     except ValueError as exc:       # no rotary inertia for the torque drive
         assert 'rotary inertia' in str(exc), str(exc)
         return

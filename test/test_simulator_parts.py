@@ -49,12 +49,27 @@ def test_parameter_defaults_are_the_core_defaults_and_in_range():
     ('physics_rate', 50.0, 'too low'),
     ('section', 'rectangular', 'section_width'),
     ('section_width', 0.004, 'applies to section=.rectangular. only'),
+    ('command_timeout', -1.0, 'command_timeout must be in'),
+    ('command_timeout', math.inf, 'command_timeout must be finite'),
+    ('command_timeout', 0.05, r'shorter than 2 x setpoint_delay \(0.1 s\)'),
 ])
 def test_bad_values_and_combinations_are_refused_with_a_reason(name, value, match):
     values = defaults()
     values[name] = value
     with pytest.raises(ValueError, match=match):
         build_settings(values)
+
+
+def test_command_timeout_is_off_by_default_passed_to_the_engine_and_documented():
+    spec = SPECS_BY_NAME['command_timeout']
+    assert spec.default == 0.0 and spec.low == 0.0 and ', s' in spec.description
+    engine, _ = build_settings({**defaults(), 'command_timeout': 0.5})
+    assert engine.command_timeout == 0.5
+    engine, _ = build_settings({**defaults(), 'command_timeout': 0.4, 'setpoint_delay': 0.2})
+    assert engine.command_timeout == 0.4
+    readme = (ROOT / 'README.md').read_text()
+    assert '`command_timeout` (s; 0 = off' in readme
+    assert 'at least 2 × `setpoint_delay`' in readme
 
 
 def test_a_rectangular_section_is_built_from_its_two_sizes():
