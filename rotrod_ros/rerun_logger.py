@@ -6,9 +6,12 @@ tip/deflection, tip/position, frequencies and frequencies/estimate, and writes
 so the file opens as a dashboard: ``rerun rotrod.rrd``. With ``serve:=true`` it also
 serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``).
 
-Data is sent in batches every ``flush_period`` seconds; on SIGINT, SIGTERM or the end
+Data is written in batches every ``flush_period`` seconds; on SIGINT, SIGTERM or the end
 of the run the last batch is written and the file closed, so ``rerun rrd verify``
-accepts it and it holds the data up to the signal.
+accepts it and it holds the data up to the signal. Killed outright (SIGKILL), the
+logger leaves a file without footer holding everything up to its last write, at most
+``flush_period`` old: it loads with ``RrdReader(path).stream()`` and
+``rerun rrd optimize FILE -o COPY`` makes a complete copy of it.
 """
 
 from __future__ import annotations
@@ -71,7 +74,7 @@ class RerunLogger(Node):
                                  lambda m: self._on_frequencies(m, False), QOS_DEPTH)
         self.create_subscription(Float64MultiArray, 'frequencies/estimate',
                                  lambda m: self._on_frequencies(m, True), QOS_DEPTH)
-        self._timer = self.create_timer(values['flush_period'], self.writer.flush,
+        self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         self.get_logger().info(f'recording to {self.writer.path}{where}')
@@ -99,6 +102,13 @@ class RerunLogger(Node):
         if self._last_stamp is None or len(msg.data) < 2:
             return
         self.writer.add_frequencies(self._last_stamp, msg.data[0], msg.data[1], estimate)
+
+    def _flush(self) -> None:
+        try:
+            self.writer.flush()
+        except Exception as exc:  # a slow or failing disk must not end the recording
+            self.get_logger().warning(f'writing the recording: {exc}',
+                                      throttle_duration_sec=10.0)
 
     def close(self) -> None:
         """Write what is buffered and close the file."""
