@@ -149,6 +149,8 @@ def test_sigkill_to_the_logger_leaves_a_loadable_file_up_to_the_last_flush(
                 f'{entity}: the file ends {lost:.3f} s before the last {topic} seen before '
                 f'the kill (flush_period {flush_period} s)')
             assert t[-1] - t[0] >= 2.5                    # from the start of the recording
+            print(f'{entity}: {len(t)} samples over {t[-1] - t[0]:.2f} s, ending {lost:.3f} s '
+                  f'before the last {topic} seen before the kill')
     # `rerun rrd optimize` writes a complete (verified) copy with the same samples
     repaired = tmp_path / 'repaired.rrd'
     fix = rrd('optimize', str(out), '-o', str(repaired))
