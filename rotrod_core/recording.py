@@ -75,6 +75,10 @@ class RecordingWriter:
 
     Call the ``add_*`` methods per message, :meth:`flush` periodically, :meth:`close`
     at the end (also on a signal): it sends what is buffered and writes the footer.
+    A process killed without :meth:`close` (SIGKILL) leaves a file without footer that
+    holds everything flushed: :func:`read_series` (``RrdReader(path).stream()``) reads
+    it, ``rerun rrd verify`` refuses it, and ``rerun rrd optimize FILE -o COPY`` writes
+    a complete copy.
     """
 
     def __init__(self, path: str | Path, *, application_id: str = 'rotrod',
@@ -130,8 +134,20 @@ class RecordingWriter:
         """Dynamic frequencies (Hz), from the model or estimated, at time ``t`` (s)."""
         self._add(F_ESTIMATE if estimate else F_MODEL, t, (f1, f2))
 
-    def flush(self) -> None:
-        """Send everything buffered to the sinks (one column batch per entity)."""
+    def flush(self, timeout: float | None = 10.0) -> None:
+        """Send everything buffered to the sinks (one column batch per entity).
+
+        Then wait (up to ``timeout`` s; None: do not wait) until the sinks have it: in
+        the file, so a process killed after this returns has lost nothing flushed (the
+        file lacks only its footer). rerun-sdk writes to the file from a thread of its
+        own, which was measured a few batches behind right after ``send_columns``.
+        Raises if the sinks do not catch up within ``timeout``.
+        """
+        self._send()
+        if timeout is not None:
+            self.rec.flush(timeout_sec=timeout)
+
+    def _send(self) -> None:
         rr = self._rr
         for entity, rows in self._buffers.items():
             if not rows:
@@ -156,8 +172,7 @@ class RecordingWriter:
         if self.closed:
             return
         self.closed = True
-        self.flush()
-        self.rec.flush(timeout_sec=timeout)
+        self.flush(timeout)
         self.rec.disconnect()
 
 

@@ -6,9 +6,13 @@ tip/deflection, tip/position, frequencies and frequencies/estimate, and writes
 so the file opens as a dashboard: ``rerun rotrod.rrd``. With ``serve:=true`` it also
 serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``).
 
-Data is sent in batches every ``flush_period`` seconds; on SIGINT, SIGTERM or the end
-of the run the last batch is written and the file closed, so ``rerun rrd verify``
-accepts it and it holds the data up to the signal.
+Data is written in batches every ``flush_period`` seconds. On SIGINT, SIGTERM or the
+end of the run the messages already received but not yet handled are taken too, the
+last batch is written and the file closed, so ``rerun rrd verify`` accepts it and it
+holds every message received up to the signal. Killed outright (SIGKILL), the logger
+leaves a file without footer holding everything up to its last write, at most
+``flush_period`` old: it loads with ``RrdReader(path).stream()`` and
+``rerun rrd optimize FILE -o COPY`` makes a complete copy of it.
 """
 
 from __future__ import annotations
@@ -63,15 +67,18 @@ class RerunLogger(Node):
         except Exception as exc:  # rerun raises several kinds for a bad path or port
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
-        self.create_subscription(JointState, 'joint_states', self._on_joint, QOS_DEPTH)
-        self.create_subscription(Vector3Stamped, 'tip/deflection', self._on_deflection,
-                                 QOS_DEPTH)
-        self.create_subscription(PointStamped, 'tip/position', self._on_position, QOS_DEPTH)
-        self.create_subscription(Float64MultiArray, 'frequencies',
-                                 lambda m: self._on_frequencies(m, False), QOS_DEPTH)
-        self.create_subscription(Float64MultiArray, 'frequencies/estimate',
-                                 lambda m: self._on_frequencies(m, True), QOS_DEPTH)
-        self._timer = self.create_timer(values['flush_period'], self.writer.flush,
+        self._topics = [   # in the order a tick publishes them (see _drain)
+            self.create_subscription(JointState, 'joint_states', self._on_joint, QOS_DEPTH),
+            self.create_subscription(Vector3Stamped, 'tip/deflection', self._on_deflection,
+                                     QOS_DEPTH),
+            self.create_subscription(PointStamped, 'tip/position', self._on_position,
+                                     QOS_DEPTH),
+            self.create_subscription(Float64MultiArray, 'frequencies',
+                                     lambda m: self._on_frequencies(m, False), QOS_DEPTH),
+            self.create_subscription(Float64MultiArray, 'frequencies/estimate',
+                                     lambda m: self._on_frequencies(m, True), QOS_DEPTH),
+        ]
+        self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         self.get_logger().info(f'recording to {self.writer.path}{where}')
@@ -100,9 +107,45 @@ class RerunLogger(Node):
             return
         self.writer.add_frequencies(self._last_stamp, msg.data[0], msg.data[1], estimate)
 
+    def _flush(self) -> None:
+        try:
+            self.writer.flush()
+        except Exception as exc:  # a slow or failing disk must not end the recording
+            self.get_logger().warning(f'writing the recording: {exc}',
+                                      throttle_duration_sec=10.0)
+
+    def _drain(self) -> int:
+        """Handle the messages received but not taken yet; return how many.
+
+        A signal stops the executor at once, possibly with the last tick's messages
+        still queued: they were received before the signal, so they belong in the file.
+        One message per subscription in turn keeps each tick's messages together (the
+        frequencies take the stamp of the joint state before them). Taken as rclpy's
+        executor and ``wait_for_message`` take them, which works after the shutdown.
+        """
+        taken = 0
+        for _ in range(QOS_DEPTH):
+            progress = False
+            for sub in self._topics:
+                try:
+                    with sub.handle:
+                        got = sub.handle.take_message(sub.msg_type, sub.raw)
+                except Exception:  # the subscription or its context is gone
+                    got = None
+                if got is not None:
+                    sub.callback(got[0])
+                    taken += 1
+                    progress = True
+            if not progress:
+                break
+        return taken
+
     def close(self) -> None:
-        """Write what is buffered and close the file."""
+        """Handle the messages already received, write what is buffered, close the file."""
+        drained = self._drain()
         self.writer.close()
+        if drained:
+            self.get_logger().info(f'handled {drained} messages received before the end')
         self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
 
 
