@@ -14,10 +14,7 @@ interval (5 ms by default). :data:`SWITCH_INTERVAL` shortens that wait.
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import os
-import resource
 import sys
 
 MAX_PRIORITY = 99
@@ -65,25 +62,3 @@ def current_thread_priority() -> int:
         return 0
     return os.sched_getparam(0).sched_priority
 
-
-MCL_CURRENT, MCL_FUTURE = 1, 2
-"""mlockall flags (Linux)."""
-
-
-def lock_memory() -> str | None:
-    """Keep the process's pages in RAM (mlockall), as ros2_control does.
-
-    A real-time thread then never waits for a page to be read back (the kernel may
-    reclaim code pages of a running program, e.g. proactive reclaim by DAMON).
-
-    Returns None on success, else why not. Only tried where the lock cannot make later
-    allocations fail: as root (CAP_IPC_LOCK) or with an unlimited ``ulimit -l``.
-    """
-    soft, _ = resource.getrlimit(resource.RLIMIT_MEMLOCK)
-    if os.geteuid() != 0 and soft != resource.RLIM_INFINITY:
-        return (f'not locking memory: the memlock limit is {soft} bytes (ulimit -l); '
-                'locked, later allocations beyond it would fail')
-    libc = ctypes.CDLL(ctypes.util.find_library('c'), use_errno=True)
-    if libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
-        return f'cannot lock memory: {os.strerror(ctypes.get_errno())}'
-    return None

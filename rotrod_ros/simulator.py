@@ -585,10 +585,6 @@ def make_executor(name: str, context=None):
 
 def _started(node: SimulatorNode) -> None:
     priority = node.settings.realtime_priority
-    if priority:
-        problem = scheduling.lock_memory()
-        node.get_logger().info('memory locked (mlockall)' if problem is None else
-                               f'realtime_priority: {problem}')
     # the objects made so far (modules, node, messages) live as long as the process:
     # out of the collector's sight, so that a collection in the physics thread scans
     # only what the run makes (measured with gc.callbacks: without it, generation-1
