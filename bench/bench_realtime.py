@@ -46,6 +46,7 @@ if not os.environ.get('ROTROD_ISOLATION'):
                               sys.executable, *sys.argv])
 
 import results  # noqa: E402  (bench/results.py)
+from node_probes import collect, cpu_seconds, stamp  # noqa: E402
 from results import Comparison, Row, Target  # noqa: E402
 from ros_harness import (  # noqa: E402
     HarnessTimeout,
@@ -64,12 +65,6 @@ from std_msgs.msg import Float64  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 PERIOD = 0.01
-
-
-def cpu_seconds(pid: int) -> float:
-    """User + system CPU time of a process, s."""
-    fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 class Simulator:
@@ -95,20 +90,6 @@ class Simulator:
             self.proc.kill()
             self.proc.wait()
             return float('inf')
-
-
-def stamp(msg) -> float:
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-
-
-def collect(node, topic, msg_type):
-    """Subscribe; return a list of (message, source time s, receive time s)."""
-    out = []
-    node.node.create_subscription(
-        msg_type, topic,
-        lambda m, info: out.append((m, info['source_timestamp'] * 1e-9,
-                                    info['received_timestamp'] * 1e-9)), 1000)
-    return out
 
 
 def realtime_run(node, duration: float, **params) -> dict:

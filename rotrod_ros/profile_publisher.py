@@ -173,13 +173,9 @@ class ProfilePublisher(Node):
 
     def schedule(self) -> None:
         """Run the calling (executor) thread at ``realtime_priority``, or say why not."""
-        if not self.realtime_priority:
-            return
-        problem = scheduling.set_current_thread_priority(self.realtime_priority)
-        if problem:
-            self.get_logger().warning(f'realtime_priority: {problem}; ordinary scheduling')
-        else:
-            self.get_logger().info(f'streaming at SCHED_FIFO priority {self.realtime_priority}')
+        if self.realtime_priority:
+            scheduling.run_current_thread_at(self.realtime_priority, self.get_logger(),
+                                             'streaming')
 
     def flush(self, timeout: float = 2.0) -> bool:
         """Wait until subscribers have acknowledged every sample (reliable QoS)."""

@@ -56,6 +56,21 @@ def set_current_thread_priority(priority: int) -> str | None:
     return None
 
 
+def run_current_thread_at(priority: int, logger, what: str) -> bool:
+    """:func:`set_current_thread_priority`, logged; returns whether it was done.
+
+    Info on success at a real-time priority, a warning with the reason on refusal.
+    ``what`` names the thread in the message (e.g. 'physics thread').
+    """
+    problem = set_current_thread_priority(priority)
+    if problem:
+        logger.warning(f'realtime_priority: {problem}; {what}: ordinary scheduling')
+        return False
+    if priority:
+        logger.info(f'{what} at SCHED_FIFO priority {priority}')
+    return True
+
+
 def current_thread_priority() -> int:
     """The calling thread's SCHED_FIFO priority (0: not real-time)."""
     if not supported() or os.sched_getscheduler(0) != os.SCHED_FIFO:

@@ -477,15 +477,10 @@ class SimulatorNode(Node):
         want = self.settings.realtime_priority if self._pacer.paced else 0
         if want == self._priority or want == self._priority_refused:
             return
-        problem = scheduling.set_current_thread_priority(want)
-        if problem:
+        if scheduling.run_current_thread_at(want, self.get_logger(), 'physics thread'):
+            self._priority = want
+        else:
             self._priority_refused = want
-            self.get_logger().warning(f'realtime_priority: {problem}; the physics thread '
-                                      'keeps ordinary scheduling')
-            return
-        if want:
-            self.get_logger().info(f'physics thread at SCHED_FIFO priority {want}')
-        self._priority = want
 
     def _run(self) -> None:
         try:
@@ -595,12 +590,7 @@ def _started(node: SimulatorNode) -> None:
     if priority > 1:
         # the executor thread stamps a command's arrival: one below the physics, so a
         # busy machine does not delay commands past setpoint_delay either
-        problem = scheduling.set_current_thread_priority(priority - 1)
-        if problem:
-            node.get_logger().warning(f'realtime_priority: {problem}; the executor thread '
-                                      'keeps ordinary scheduling')
-        else:
-            node.get_logger().info(f'executor thread at SCHED_FIFO priority {priority - 1}')
+        scheduling.run_current_thread_at(priority - 1, node.get_logger(), 'executor thread')
     s, c = node.settings, node.engine.config
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '

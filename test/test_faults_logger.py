@@ -13,7 +13,6 @@ data is contiguous from the start and ends at most ``flush_period`` (+ a margin 
 the executor) before the kill.
 """
 
-import hashlib
 import os
 import signal
 import subprocess
@@ -23,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped, Vector3Stamped
+from node_probes import namespace, stamp
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 
@@ -44,14 +44,6 @@ TOPICS = {   # topic -> (message type, entities written from it)
     'tip/deflection': (Vector3Stamped, (recording.U, recording.V, recording.ROTATING_TIP)),
     'tip/position': (PointStamped, (recording.INERTIAL_TIP,)),
 }
-
-
-def namespace(request) -> str:
-    return '/t' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
-
-
-def seconds(msg) -> float:
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
 def rrd(*args: str) -> subprocess.CompletedProcess:
@@ -79,7 +71,7 @@ def run_simulator_and_logger(ros_processes, ros_node, ns: str, out, flush_period
     first = float(logger.wait_for_output(r'receiving: first joint state stamped ([0-9.]+) s',
                                          timeout=30).group(1))
     joint = got['joint_states']
-    ros_node.spin_until(lambda: joint and seconds(joint[-1]) >= first + seconds_of_data, 30,
+    ros_node.spin_until(lambda: joint and stamp(joint[-1]) >= first + seconds_of_data, 30,
                         f'{seconds_of_data:g} s of joint states')
     return logger, got
 
@@ -110,7 +102,7 @@ def test_sigterm_to_the_logger_loses_nothing_published_before_it(ros_processes, 
     out = tmp_path / 'run.rrd'
     logger, got = run_simulator_and_logger(ros_processes, ros_node, namespace(request), out,
                                            flush_period=0.25)
-    before = {topic: [seconds(m) for m in msgs] for topic, msgs in got.items()}
+    before = {topic: [stamp(m) for m in msgs] for topic, msgs in got.items()}
     logger.signal_group(signal.SIGTERM)
     assert logger.wait(timeout=30) == 0
     check = rrd('verify', str(out))
@@ -136,7 +128,7 @@ def test_sigkill_to_the_logger_leaves_a_loadable_file_up_to_the_last_flush(
     out = tmp_path / 'run.rrd'
     logger, got = run_simulator_and_logger(ros_processes, ros_node, namespace(request), out,
                                            flush_period, seconds_of_data=3.0 + flush_period)
-    last_seen = {topic: seconds(msgs[-1]) for topic, msgs in got.items()}
+    last_seen = {topic: stamp(msgs[-1]) for topic, msgs in got.items()}
     logger.signal_group(signal.SIGKILL)
     assert logger.wait(timeout=30) == -signal.SIGKILL
     # no footer: verify refuses the file, the chunk stream reads it

@@ -13,7 +13,6 @@ publish) against the simulated instant it carries (its stamp: wall-clock time at
 real_time_factor 1), as bench/bench_realtime.py does.
 """
 
-import hashlib
 import math
 import os
 import re
@@ -27,6 +26,7 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
+from node_probes import collect, namespace, rss, stamp, start_simulator
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from ros_harness import console_script, ros_arguments
@@ -60,38 +60,6 @@ def this_checkout():
         for path in out.stdout.split():
             assert Path(path).resolve().is_relative_to(ROOT), (path, ROOT)
         yield
-
-
-def namespace(request) -> str:
-    return '/f' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
-
-
-def start_simulator(ros_processes, ns, **params):
-    proc = ros_processes.start_console_script(
-        'simulator', *ros_arguments(namespace=ns, params=params), name=ns.strip('/'))
-    proc.wait_for_output('ready', timeout=30)
-    return proc
-
-
-def stamp(msg) -> float:
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-
-
-def collect(node, topic, msg_type):
-    """Subscribe; a list of (message, DDS source time s, receive time s)."""
-    out = []
-    node.node.create_subscription(
-        msg_type, topic, lambda m, info: out.append(
-            (m, info['source_timestamp'] * 1e-9, info['received_timestamp'] * 1e-9)), 1000)
-    return out
-
-
-def rss(pid: int) -> int:
-    """Resident memory of a process, bytes (/proc/<pid>/status VmRSS)."""
-    for line in Path(f'/proc/{pid}/status').read_text().splitlines():
-        if line.startswith('VmRSS:'):
-            return int(line.split()[1]) * 1024
-    raise AssertionError(f'no VmRSS for pid {pid}')
 
 
 def statuses(diags, ns):

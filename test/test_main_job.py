@@ -1,6 +1,5 @@
 """The profile publisher, the Rerun logger and the main job, as real processes."""
 
-import hashlib
 import os
 import signal
 import subprocess
@@ -10,6 +9,7 @@ import time
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
+from node_probes import namespace
 from reference import eq26
 from ros_harness import ros_arguments
 from rosgraph_msgs.msg import Clock
@@ -21,11 +21,6 @@ from rotrod_core.alignment import profile_delay
 from rotrod_ros.install import executable
 
 pytestmark = pytest.mark.ros
-
-
-def namespace(request) -> str:
-    """A short namespace unique to the test (long DDS names slow discovery down)."""
-    return '/t' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
 
 
 def verify(path) -> str:

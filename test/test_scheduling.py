@@ -66,3 +66,29 @@ def test_a_priority_outside_0_to_99_is_an_error(bad):
     with pytest.raises(ValueError, match='priority must be an integer'):
         scheduling.set_current_thread_priority(bad)
 
+
+
+class Log:
+    def __init__(self):
+        self.lines = []
+
+    def info(self, text):
+        self.lines.append(('info', text))
+
+    def warning(self, text):
+        self.lines.append(('warning', text))
+
+
+def test_a_refusal_is_logged_with_its_reason_and_success_with_the_priority(monkeypatch):
+    log = Log()
+    assert in_thread(lambda: scheduling.run_current_thread_at(0, log, 'physics thread'))
+    assert log.lines == []                              # ordinary: nothing to say
+    monkeypatch.setattr(scheduling, 'set_current_thread_priority', lambda p: 'no rights')
+    assert not scheduling.run_current_thread_at(50, log, 'physics thread')
+    assert log.lines == [('warning', 'realtime_priority: no rights; physics thread: '
+                                     'ordinary scheduling')]
+    if ROOT:
+        monkeypatch.undo()
+        log = Log()
+        assert in_thread(lambda: scheduling.run_current_thread_at(20, log, 'streaming'))
+        assert log.lines == [('info', 'streaming at SCHED_FIFO priority 20')]

@@ -1,7 +1,6 @@
 """The simulator node, run as a real process, against closed forms, invariants and the
 offline run (through the ROS test harness; DDS stays on this machine)."""
 
-import hashlib
 import math
 import os
 import time
@@ -9,10 +8,10 @@ import time
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped, Vector3Stamped
+from node_probes import namespace, stamp, start_simulator
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from reference import R0, W0, K, M, eq26
-from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import SetBool, Trigger
@@ -23,22 +22,6 @@ from rotrod_ros import scheduling
 pytestmark = pytest.mark.ros
 
 FAST = 4.0          # real_time_factor for tests that do not need wall-clock pacing
-
-
-def namespace(request) -> str:
-    """A short namespace unique to the test (long DDS names slow discovery down)."""
-    return '/t' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
-
-
-def start_simulator(ros_processes, ns, **params):
-    proc = ros_processes.start_console_script(
-        'simulator', *ros_arguments(namespace=ns, params=params), name=ns.strip('/'))
-    proc.wait_for_output('ready', timeout=30)
-    return proc
-
-
-def stamp(msg) -> float:
-    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
 def by_time(joint, deflection):

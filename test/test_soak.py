@@ -34,14 +34,14 @@ The measured numbers are printed (``-rA`` shows them for a passing run);
 ``ROTROD_SOAK_DUMP=FILE.npz`` also saves the samples (RSS, stamps, source times).
 """
 
-import hashlib
 import os
 import re
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from node_probes import cpu_seconds, namespace
+from node_probes import rss as vm_rss
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 
@@ -61,17 +61,6 @@ RECEIVED_MIN = 0.999
 pytestmark = [pytest.mark.long, pytest.mark.ros]
 
 
-def vm_rss(pid: int) -> int:
-    """Resident set size of a process, bytes."""
-    text = Path(f'/proc/{pid}/status').read_text()
-    return int(re.search(r'^VmRSS:\s+(\d+) kB', text, re.MULTILINE).group(1)) * 1024
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
-
-
 def windows(t: np.ndarray, start: float, end: float) -> tuple:
     """Masks of the first and the last WINDOW seconds of [start, end]."""
     return (t >= start) & (t < start + WINDOW), (t > end - WINDOW) & (t <= end)
@@ -81,7 +70,7 @@ def windows(t: np.ndarray, start: float, end: float) -> tuple:
 def test_soak_at_1khz_memory_and_simulated_time_hold(ros_processes, ros_node, request,
                                                      tmp_path):
     assert SOAK_SECONDS >= 30, 'ROTROD_SOAK_SECONDS below 30 s leaves no window to compare'
-    ns = '/t' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
+    ns = namespace(request)
     out = tmp_path / 'soak.rrd'
     joint = []                       # (stamp, source time, omega) per joint state
 
