@@ -182,6 +182,14 @@ class LowerEnvelope:
         """Positions in the window (0 = oldest) of the hull's vertices."""
         return [i - self._head for i in self._hull]
 
+    def mean_interval(self) -> float:
+        """Mean spacing of the window's times: (newest - oldest) / (count - 1), s.
+
+        Unlike the hull's slopes it counts every point, so a burst does not bias it
+        below the stream's interval (only the oldest and newest delays enter it).
+        """
+        return (self._t[-1] - self._t[self._head]) / (self.count - 1)
+
     def line(self) -> tuple:
         """The grid: (slope, value at the newest point) of a supporting line.
 
@@ -288,6 +296,14 @@ class OmegaSetpointShaper:
         if envelope.count < 2:
             return None
         slope, grid = envelope.line()
+        if slope < 0.5 * envelope.mean_interval():
+            # the window's middle is a burst: samples held up and delivered together,
+            # as when a stream starts before its subscriber has matched the sender. Its
+            # spacing is no interval of the stream, and lines across it run below the
+            # punctual samples after it: the grid starts over from this arrival
+            envelope.clear()
+            envelope.add(t)
+            return None
         if not self.min_interval <= slope <= self.max_interval:
             # a burst with no punctual arrival yet (or a stream too fast to track):
             # the grid is unknown, the setpoint is taken as it comes
@@ -321,7 +337,12 @@ class OmegaSetpointShaper:
             path = self._extrapolation()
         last = self._ramps[-1]
         if due >= t + 0.5 * self.interval:       # on time: reach the setpoint when due
-            start = last.end if t <= last.end <= due else t
+            # from where the previous ramp ends, if the limit lets w get from there to
+            # the setpoint by its due time; else (a burst: due times together) from now,
+            # straight to the setpoint, leaving the previous one unreached
+            chained = (t <= last.end <= due and abs(w_set - last.omegas[1])
+                       <= limit * (due - last.end))
+            start = last.end if chained else t
             reach, target = due, w_set
         else:                                   # late: rejoin the extrapolated stream
             self.late_setpoints += 1

@@ -191,6 +191,37 @@ def test_late_arrivals_of_half_the_stream_do_not_move_the_grid():
     assert np.max(np.abs(w - a * (t - 0.1))) < 1e-9
 
 
+@pytest.mark.parametrize('held', [30, 66, 150])
+@pytest.mark.parametrize('jitter', [0.0, 0.0005])
+def test_a_stream_whose_first_samples_arrive_together_is_then_its_delayed_interpolation(
+        held, jitter):
+    """A subscriber that matches the sender after it has started gets the samples sent
+    meanwhile all at once (DDS). The burst ends with a punctual sample; from there on
+    w is the stream's linear interpolation delayed by the delay, as if the stream had
+    just started, and before it w ramps to the burst's last sample."""
+    profile = lambda t: 0.5 * (1.0 - np.cos(2.0 * t))  # noqa: E731  |w'| <= 1 rad/s^2
+    D, limit, n = 0.2, 10.0, 600
+    sh = OmegaSetpointShaper(limit, delay=D)
+    rng = np.random.default_rng(held)
+    arrivals = np.maximum(np.arange(n), held - 1) * T + rng.exponential(jitter, n) \
+        if jitter else np.maximum(np.arange(n), held - 1) * T
+    arrivals = np.maximum.accumulate(arrivals)
+    for k in range(n):
+        sh.command(profile(k * T), arrivals[k])
+    t = np.linspace(0.0, (n - 1) * T + D, 20001)
+    w, wd = sample(sh, t)
+    assert np.all(np.abs(wd) <= limit * (1 + 1e-9))
+    # the ramp to the burst's last sample is within the limit: due with it
+    after = t >= (held - 1) * T + D + (2 * T if jitter else 0.0)
+    expected = np.interp(t[after] - D, np.arange(n) * T, profile(np.arange(n) * T))
+    # on the grid of the punctual samples, whose phase is within the latencies
+    err = np.max(np.abs(w[after] - expected))
+    print(f'{held} held, jitter {jitter}: max |w - interpolation| {err:.2e} rad/s')
+    assert err <= 1e-9 + 1.0 * 4 * jitter
+    assert sh.late_setpoints == 0
+    assert sh.interval == pytest.approx(T, rel=0.05)
+
+
 def test_a_stall_longer_than_the_delay_coasts_at_the_stream_slope_and_rejoins():
     """A smooth profile through a 150 ms stall, 3x the delay: w goes on along the
     stream's extrapolation (w' linear in t), stays within w''' s^3 of the delayed
