@@ -141,7 +141,9 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
         procs.start('simulator', cmds['simulator'])
         procs.wait_for_log('simulator', 'ready', 30)
         procs.start('rerun_logger', cmds['rerun_logger'])
-        procs.wait_for_log('rerun_logger', 'recording to', 30)
+        # the profile starts once the logger has the simulator's data: its subscriptions
+        # can match a few seconds after they exist (a missed discovery announcement)
+        procs.wait_for_log('rerun_logger', 'receiving: first joint state', 30)
         publisher = procs.start('profile_publisher', cmds['profile_publisher'])
         deadline = time.monotonic() + timeout
         while publisher.poll() is None:

@@ -17,6 +17,7 @@ from std_msgs.msg import Float64
 from rotrod_core import Eq26Profile, RodParams, recording, simulate
 from rotrod_core.alignment import profile_delay
 from rotrod_ros.install import executable
+from rotrod_ros.profile_publisher import MATCH_SETTLE
 
 pytestmark = pytest.mark.ros
 
@@ -40,13 +41,19 @@ def test_profile_publisher_waits_streams_the_profile_and_exits(ros_processes, ro
     pub.wait_for_output('waiting for a subscriber', timeout=30)
     time.sleep(0.5)
     assert pub.running                                   # nobody listening: it waits
-    got = ros_node.subscribe(f'{ns}/cmd/omega', Float64, qos=1000)
+    subscribed = time.monotonic()
+    got, arrived = [], []
+    ros_node.node.create_subscription(Float64, f'{ns}/cmd/omega', lambda m: (
+        got.append(m), arrived.append(time.monotonic())), 1000)
     ros_node.spin_until(lambda: pub.poll() is not None, 30, 'the publisher exits')
     ros_node.spin_for(0.3)
     assert pub.returncode == 0
     assert 'start: streaming eq26' in pub.output and 'end: published 201 samples' in pub.output
     if os.geteuid() == 0:                                # permitted: real-time priority
         assert 'streaming at SCHED_FIFO priority 50' in pub.output
+    # the sender lets the subscriber match it too before it starts: no start burst
+    assert arrived[0] - subscribed >= MATCH_SETTLE
+    assert arrived[19] - arrived[0] >= 0.15             # 19 intervals of 10 ms, not together
     values = [m.data for m in got]
     assert len(values) == 201
     expected = [eq26(k / 100.0, T=0.5)[0] for k in range(201)]   # MODEL.md, sample k
