@@ -121,9 +121,6 @@ def test_profile_publisher_refuses_bad_parameters(ros_processes, params, reason)
     assert 'invalid configuration' in proc.output and reason in proc.output
 
 
-# retried: flaky after this stop's merges (3 of 12 runs: the recording's first ~3 s
-# missing, or a spin-up estimate 2.4 % off); not yet understood, open in #4
-@pytest.mark.flaky(reruns=2)
 def test_the_main_job_end_to_end(tmp_path):
     """``rotrod demo``: Eq. 26 through the three nodes; the recording is read back."""
     out = tmp_path / 'demo' / 'rotrod.rrd'
