@@ -15,6 +15,8 @@ process's subscriptions:
   command's publish time to the source timestamp of the first moved deflection;
 * as-fast-as-possible mode (real_time_factor 0): simulated seconds per wall second
   while publishing every 10 ms of simulated time;
+* the machine's floor: how late a bare Python thread at SCHED_FIFO 50 wakes from
+  sleeping to 10 ms deadlines (as cyclictest), over the same duration;
 * the same real-time run with the experimental EventsExecutor (parameter
   ``executor:=events``), and with ordinary scheduling of the physics thread
   (``realtime_priority:=0``; the default runs it at SCHED_FIFO priority 50), for
@@ -26,6 +28,7 @@ made to start with it (inherited by the nodes), and checked before the runs.
 """
 
 import argparse
+import json
 import math
 import os
 import platform
@@ -178,6 +181,43 @@ def fast_run(node, duration: float) -> dict:
             'received_fraction': float(len(rows) / ((stamps[-1] - stamps[0]) / PERIOD + 1))}
 
 
+SLEEP_FLOOR = """
+import json, os, sys, threading, time
+priority, duration, period = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
+late = []
+def run():
+    if priority:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    due = time.monotonic() + period
+    end = due + duration
+    while due < end:
+        left = due - time.monotonic()
+        if left > 0:
+            time.sleep(left)
+        late.append(time.monotonic() - due)
+        due += period
+thread = threading.Thread(target=run)
+thread.start()
+thread.join()
+print(json.dumps(late))
+"""
+
+
+def sleep_floor(duration: float, priority: int = 50) -> dict:
+    """The machine's own wake-up lateness: a bare Python thread (no ROS, no work) at
+    SCHED_FIFO ``priority`` sleeping to deadlines every 10 ms for ``duration`` s, as
+    cyclictest does in C. What the simulator's publication lag cannot go below when it
+    only sleeps (it polls the clock for the last SPIN before a publication)."""
+    out = subprocess.run([sys.executable, '-c', SLEEP_FLOOR, str(priority), str(duration),
+                          str(PERIOD)], capture_output=True, text=True, check=True,
+                         timeout=duration + 60)
+    late = np.array(json.loads(out.stdout))
+    return {'priority': priority, 'wakeups': len(late),
+            'late_ms_max': 1e3 * float(late.max()),
+            'late_ms_p99': 1e3 * float(np.percentile(late, 99)),
+            'late_ms_median': 1e3 * float(np.median(late))}
+
+
 def simulator_code() -> str:
     """Where the simulator console script imports ``rotrod_ros.simulator`` from.
 
@@ -216,9 +256,11 @@ def measure(duration: float = 60.0) -> tuple:
         fast = fast_run(node, min(20.0, duration))
         events = realtime_run(node, min(10.0, duration), executor='events')
         ordinary = realtime_run(node, duration, realtime_priority=0)
+    floor = sleep_floor(duration)
     raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
-           'fast': fast, 'events_executor': events, 'ordinary_scheduling': ordinary}
+           'fast': fast, 'events_executor': events, 'ordinary_scheduling': ordinary,
+           'sleep_floor': floor}
     ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
     od = f"ordinary scheduling, realtime_priority 0 ({ordinary['duration_s']:.0f} s run)"
 
@@ -242,6 +284,10 @@ def measure(duration: float = 60.0) -> tuple:
                                     f"p99 {ordinary['lag_ms_p99']:.2f} ms")]),
         row('drift of simulated time from the clock: median lag, last 100 minus first 100 '
             'publications', rt['lag_drift_ms'], 'ms', fmt='+.3f'),
+        row(f"machine floor: a bare Python thread at SCHED_FIFO {floor['priority']} sleeping "
+            f"to 10 ms deadlines, lateness (max of {floor['wakeups']}, no ROS)",
+            floor['late_ms_max'], 'ms', fmt='.2f',
+            note=f"p99 {floor['late_ms_p99']:.2f} ms, median {floor['late_ms_median']:.2f} ms"),
         row('publish-interval error (jitter), p99', rt['interval_error_ms_p99'], 'ms',
             target=Target('<=', 1), note=f"max {rt['interval_error_ms_max']:.2f} ms",
             fmt='.3f', comparisons=[Comparison(

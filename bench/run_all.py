@@ -275,7 +275,7 @@ def main(argv: list | None = None) -> int:
     rows, notes, loads = [], [], []
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
-               ('bench_realtime.py', ['--duration', f'{duration:g}'], 3 * duration + 600)]
+               ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600)]
     with tempfile.TemporaryDirectory(prefix='rotrod-bench-') as tmp:
         tmp = Path(tmp)
         for script, bench_args, timeout in benches:
