@@ -108,7 +108,8 @@ NODE_SPECS = (
          'simulated seconds per wall second; 0 = as fast as possible. /clock is published '
          'whenever it is not 1', 0.0, 1e4),
     Spec('markers', True, 'publish markers (visualization_msgs/MarkerArray) for RViz'),
-    Spec('marker_rate', 20.0, 'rate of markers, Hz of simulated time', 0.1, 1e3),
+    Spec('marker_rate', 20.0, 'rate of markers, Hz of simulated time, and at most twice '
+         'that in wall time (faster than real time)', 0.1, 1e3),
     Spec('marker_trail_length', 200, 'points kept in the tip trail marker', 0, 100000,
          integer=True),
     Spec('marker_deflection_scale', 20.0,

@@ -155,6 +155,7 @@ class SimulatorNode(Node):
         self._countdown = 0
         self._published = (0.0, time.monotonic())
         self._samples_since_marker = 0
+        self._next_marker_wall = 0.0         # monotonic time of the next allowed markers
         self._trail: deque = deque(maxlen=max(1, self.settings.marker_trail_length))
         self._last_level: int | None = None
         self._timeouts_logged = 0
@@ -440,7 +441,14 @@ class SimulatorNode(Node):
         self._samples_since_marker += 1
         markers = self.settings.markers and self._samples_since_marker >= self._marker_every
         if markers:
-            self._samples_since_marker = 0
+            # a viewer shows markers in wall time: faster than real time, at most twice
+            # marker_rate per wall second (as fast as possible, markers every 10 ms of
+            # simulated time cost a third of the speed)
+            now = time.monotonic()
+            markers = now >= self._next_marker_wall
+            if markers:
+                self._samples_since_marker = 0
+                self._next_marker_wall = now + 0.5 / self.settings.marker_rate
         due = self._pacer.wall_time(eng.time) if self._pacer.paced else None
         return Sample(due, eng.time, messages.stamp(self._stamps.stamp(eng.time)), eng.state,
                       eng.torque, eng.frequencies(), eng.inertial_position(), markers)

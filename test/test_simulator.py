@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped, Vector3Stamped
-from node_probes import namespace, stamp, start_simulator
+from node_probes import collect, namespace, stamp, start_simulator
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from reference import R0, W0, K, M, eq26
@@ -399,3 +399,37 @@ def test_resets_in_quick_succession_keep_stamps_increasing_and_the_node_running(
     assert sim.running and 'physics thread failed' not in sim.output
     stamps = np.array([stamp(m) for m in joint])
     assert np.all(np.diff(stamps) > 0)
+
+
+@pytest.mark.parametrize('factor', [1.0, 0.0])
+def test_markers_show_disk_rod_mass_and_a_bounded_trail_at_a_viewable_rate(
+        ros_processes, ros_node, request, factor):
+    """RViz markers: disk, spoke, rod, mass and the tip's trail, at marker_rate Hz of
+    simulated time; as fast as possible at most twice marker_rate per wall second (a
+    viewer shows them in wall time), while the state goes on at every 10 ms."""
+    from visualization_msgs.msg import Marker, MarkerArray
+    ns = namespace(request)
+    start_simulator(ros_processes, ns, real_time_factor=factor, marker_rate=10.0,
+                    marker_trail_length=15)
+    markers = collect(ros_node, f'{ns}/markers', MarkerArray)
+    joint = collect(ros_node, f'{ns}/joint_states', JointState)
+    ros_node.spin_until(lambda: len(markers) >= 3, 30, 'markers')
+    n0, j0, t0 = len(markers), len(joint), time.monotonic()
+    ros_node.spin_for(3.0)
+    wall = time.monotonic() - t0
+    got = [m for m, _, _ in markers[n0:]]
+    sim = stamp(joint[-1][0]) - stamp(joint[j0][0])
+    if factor == 1.0:
+        assert len(got) == pytest.approx(10.0 * wall, abs=3)        # 10 Hz of sim time
+    else:
+        assert sim > 10 * wall                                     # far faster than real time
+        assert len(got) <= 2 * 10.0 * wall + 2
+        assert len(got) >= 0.5 * 10.0 * wall
+    last = got[-1].markers
+    assert [m.type for m in last] == [Marker.CYLINDER, Marker.LINE_LIST, Marker.LINE_STRIP,
+                                      Marker.SPHERE, Marker.LINE_STRIP]
+    assert len(last[4].points) == 15                               # the trail is bounded
+    tip = last[2].points[-1]
+    assert (tip.x, tip.y, tip.z) == (last[3].pose.position.x, last[3].pose.position.y,
+                                     last[3].pose.position.z)      # the mass on the tip
+    assert tip.z == pytest.approx(RodParams().rod_length)
