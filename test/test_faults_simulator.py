@@ -114,6 +114,17 @@ class ParameterClient:
                 ParameterType.PARAMETER_STRING: v.string_value}[v.type]
 
 
+def observed_simulator(ros_processes, ros_node, ns, **params):
+    """The simulator in ``ns`` (``params``) and this process's views of it: the
+    simulator process and the collected joint_states, tip/deflection (lists of
+    (message, source time, receive time)) and /diagnostics messages."""
+    sim = start_simulator(ros_processes, ns, **params)
+    joint = collect(ros_node, f'{ns}/joint_states', JointState)
+    defl = collect(ros_node, f'{ns}/tip/deflection', Vector3Stamped)
+    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
+    return sim, joint, defl, diags
+
+
 # --------------------------------------------------------------------------- a. flood
 
 def test_a_10_khz_command_flood_keeps_the_physics_on_time_and_memory_flat(
@@ -125,11 +136,8 @@ def test_a_10_khz_command_flood_keeps_the_physics_on_time_and_memory_flat(
     time keeps pace with the clock, memory stays flat, and w stays physical and follows
     the stream, ending exactly at its last setpoint."""
     ns = namespace(request)
-    sim = start_simulator(ros_processes, ns)                 # real time, markers on
+    sim, joint, defl, diags = observed_simulator(ros_processes, ros_node, ns)  # real time
     assert 'simulator' in Path(f'/proc/{sim.pid}/cmdline').read_text()
-    joint = collect(ros_node, f'{ns}/joint_states', JointState)
-    defl = collect(ros_node, f'{ns}/tip/deflection', Vector3Stamped)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
     pub = ros_node.node.create_publisher(Float64, f'{ns}/cmd/omega', 1000)
     ros_node.spin_until(lambda: pub.get_subscription_count() > 0 and len(joint) > 50, 20,
                         'simulator publishing and subscribed')
@@ -249,10 +257,7 @@ def kill_mid_spin_up(ros_node, publisher, ns, joint, at_omega):
 def test_a_killed_sender_leaves_w_at_its_last_setpoint_without_a_command_timeout(
         ros_processes, ros_node, request):
     ns = namespace(request)
-    sim = start_simulator(ros_processes, ns)
-    joint = collect(ros_node, f'{ns}/joint_states', JointState)
-    defl = collect(ros_node, f'{ns}/tip/deflection', Vector3Stamped)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
+    sim, joint, defl, diags = observed_simulator(ros_processes, ros_node, ns)
     ros_node.spin_until(lambda: len(joint) > 10 and len(defl) > 10, 20, 'publishing')
     publisher = start_ramp_publisher(ros_processes, ns)
     setpoints, killed = kill_mid_spin_up(ros_node, publisher, ns, joint, 0.5)
@@ -280,10 +285,8 @@ def test_a_killed_sender_is_spun_down_at_the_acceleration_limit_with_a_command_t
         ros_processes, ros_node, request):
     ns = namespace(request)
     timeout = 0.5
-    sim = start_simulator(ros_processes, ns, command_timeout=timeout)
-    joint = collect(ros_node, f'{ns}/joint_states', JointState)
-    defl = collect(ros_node, f'{ns}/tip/deflection', Vector3Stamped)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
+    sim, joint, defl, diags = observed_simulator(ros_processes, ros_node, ns,
+                                                 command_timeout=timeout)
     ros_node.spin_until(lambda: len(joint) > 10 and len(defl) > 10, 20, 'publishing')
     publisher = start_ramp_publisher(ros_processes, ns)
     _, killed = kill_mid_spin_up(ros_node, publisher, ns, joint, 0.5)
@@ -364,10 +367,7 @@ INVALID = [
 def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         ros_processes, ros_node, request):
     ns = namespace(request)
-    sim = start_simulator(ros_processes, ns)
-    joint = collect(ros_node, f'{ns}/joint_states', JointState)
-    defl = collect(ros_node, f'{ns}/tip/deflection', Vector3Stamped)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
+    sim, joint, defl, diags = observed_simulator(ros_processes, ros_node, ns)
     ros_processes.start_console_script('profile_publisher', *ros_arguments(
         namespace=ns, params={'profile': 'sine_sweep', 'offset': 0.5, 'amplitude': 0.2,
                               'f_start': 0.05, 'f_end': 0.2, 'sweep_time': 60.0,
