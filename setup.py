@@ -38,7 +38,7 @@ setup(
         # rclpy and the standard messages from PyPI wheels (a ROS install provides them).
         'ros': ['ros-jazzy-rclpy[fastrtps]', 'ros-jazzy-common-interfaces'],
         'viz': ['rerun-sdk', 'matplotlib'],
-        'dev': ['pytest', 'pytest-timeout', 'pytest-rerunfailures', 'hypothesis', 'ruff',
+        'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff',
                 'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py'],
     },
     zip_safe=True,
