@@ -16,11 +16,13 @@ process's subscriptions:
 * as-fast-as-possible mode (real_time_factor 0): simulated seconds per wall second
   while publishing every 10 ms of simulated time;
 * the machine's floor: how late a bare Python thread at SCHED_FIFO 50 wakes from
-  sleeping to 10 ms deadlines (as cyclictest), over the same duration;
+  sleeping to 10 ms deadlines (as cyclictest), over the same duration, without and
+  with a CPU wake-up latency request of 0 us (idle CPUs poll instead of halting);
 * the same real-time run with the experimental EventsExecutor (parameter
   ``executor:=events``), and with ordinary scheduling of the physics thread
-  (``realtime_priority:=0``; the default runs it at SCHED_FIFO priority 50), for
-  comparison.
+  (``realtime_priority:=0``; the default runs it at SCHED_FIFO priority 50), and
+  without the node's CPU wake-up latency request (``cpu_dma_latency:=-1``; the
+  default holds 0 us while paced), for comparison.
 
 Prints a Markdown table and writes JSON if asked; ``measure()`` returns the rows
 (bench/results.py). The node processes run the code of this checkout: PYTHONPATH is
@@ -183,7 +185,12 @@ def fast_run(node, duration: float) -> dict:
 
 SLEEP_FLOOR = """
 import json, os, sys, threading, time
+from rotrod_ros.scheduling import CpuLatencyRequest
 priority, duration, period = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
+latency = int(sys.argv[4])
+request = CpuLatencyRequest()
+if latency >= 0 and request.hold(latency):
+    sys.exit('cannot hold the CPU latency request')
 late = []
 def run():
     if priority:
@@ -203,16 +210,17 @@ print(json.dumps(late))
 """
 
 
-def sleep_floor(duration: float, priority: int = 50) -> dict:
+def sleep_floor(duration: float, priority: int = 50, cpu_latency: int = -1) -> dict:
     """The machine's own wake-up lateness: a bare Python thread (no ROS, no work) at
     SCHED_FIFO ``priority`` sleeping to deadlines every 10 ms for ``duration`` s, as
-    cyclictest does in C. What the simulator's publication lag cannot go below when it
-    only sleeps (it polls the clock for the last SPIN before a publication)."""
+    cyclictest does in C, holding a CPU wake-up latency request of ``cpu_latency`` us
+    (-1: none). What the simulator's publication lag cannot go below when it only
+    sleeps (it polls the clock for the last SPIN before a publication)."""
     out = subprocess.run([sys.executable, '-c', SLEEP_FLOOR, str(priority), str(duration),
-                          str(PERIOD)], capture_output=True, text=True, check=True,
-                         timeout=duration + 60)
+                          str(PERIOD), str(cpu_latency)], capture_output=True, text=True,
+                         check=True, timeout=duration + 60)
     late = np.array(json.loads(out.stdout))
-    return {'priority': priority, 'wakeups': len(late),
+    return {'priority': priority, 'cpu_latency': cpu_latency, 'wakeups': len(late),
             'late_ms_max': 1e3 * float(late.max()),
             'late_ms_p99': 1e3 * float(np.percentile(late, 99)),
             'late_ms_median': 1e3 * float(np.median(late))}
@@ -256,13 +264,17 @@ def measure(duration: float = 60.0) -> tuple:
         fast = fast_run(node, min(20.0, duration))
         events = realtime_run(node, min(10.0, duration), executor='events')
         ordinary = realtime_run(node, duration, realtime_priority=0)
+        asleep = realtime_run(node, duration, cpu_dma_latency=-1)
     floor = sleep_floor(duration)
+    floor_awake = sleep_floor(duration, cpu_latency=0)
     raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
            'fast': fast, 'events_executor': events, 'ordinary_scheduling': ordinary,
-           'sleep_floor': floor}
+           'no_cpu_latency_request': asleep, 'sleep_floor': floor,
+           'sleep_floor_cpu_latency_0': floor_awake}
     ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
     od = f"ordinary scheduling, realtime_priority 0 ({ordinary['duration_s']:.0f} s run)"
+    sl = f"idle CPUs may halt, cpu_dma_latency -1 ({asleep['duration_s']:.0f} s run)"
 
     def exit_note(seconds):
         return '' if math.isfinite(seconds) else 'did not exit within 5 s; killed'
@@ -281,18 +293,25 @@ def measure(duration: float = 60.0) -> tuple:
             target=Target('<=', 2), fmt='.2f',
             note=f"p99 {rt['lag_ms_p99']:.2f} ms, median {rt['lag_ms_median']:.2f} ms",
             comparisons=[Comparison(od, ordinary['lag_ms_max'],
-                                    f"p99 {ordinary['lag_ms_p99']:.2f} ms")]),
+                                    f"p99 {ordinary['lag_ms_p99']:.2f} ms"),
+                         Comparison(sl, asleep['lag_ms_max'],
+                                    f"p99 {asleep['lag_ms_p99']:.2f} ms")]),
         row('drift of simulated time from the clock: median lag, last 100 minus first 100 '
             'publications', rt['lag_drift_ms'], 'ms', fmt='+.3f'),
         row(f"machine floor: a bare Python thread at SCHED_FIFO {floor['priority']} sleeping "
             f"to 10 ms deadlines, lateness (max of {floor['wakeups']}, no ROS)",
             floor['late_ms_max'], 'ms', fmt='.2f',
-            note=f"p99 {floor['late_ms_p99']:.2f} ms, median {floor['late_ms_median']:.2f} ms"),
+            note=f"p99 {floor['late_ms_p99']:.2f} ms, median {floor['late_ms_median']:.2f} ms",
+            comparisons=[Comparison(
+                'the same thread holding cpu_dma_latency 0 (idle CPUs poll)',
+                floor_awake['late_ms_max'], f"p99 {floor_awake['late_ms_p99']:.2f} ms")]),
         row('publish-interval error (jitter), p99', rt['interval_error_ms_p99'], 'ms',
             target=Target('<=', 1), note=f"max {rt['interval_error_ms_max']:.2f} ms",
             fmt='.3f', comparisons=[Comparison(
                 od, ordinary['interval_error_ms_p99'],
-                f"max {ordinary['interval_error_ms_max']:.2f} ms")]),
+                f"max {ordinary['interval_error_ms_max']:.2f} ms"), Comparison(
+                sl, asleep['interval_error_ms_p99'],
+                f"max {asleep['interval_error_ms_max']:.2f} ms")]),
         row('messages received', received(rt), '% of expected', better='higher', fmt='.2f',
             note=f"{rt['messages']} / {rt['expected_messages']}",
             comparisons=[Comparison(ev, received(events),

@@ -17,6 +17,8 @@ from rotrod_core.engine import DRIVES, EngineConfig
 from rotrod_core.model import COUPLINGS, STATE_FIELDS
 from rotrod_core.params import SECTIONS, RodParams
 
+from .scheduling import MAX_CPU_LATENCY
+
 EXECUTORS = ('single_threaded', 'events')
 MIN_ESTIMATE_SAMPLES = 20
 """Fewest publications an estimate window may hold."""
@@ -134,6 +136,13 @@ NODE_SPECS = (
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
          'warning otherwise', 0, 99, integer=True, read_only=True),
+    Spec('cpu_dma_latency', 0,
+         'while paced (real_time_factor > 0), the CPU wake-up latency the node asks the '
+         'kernel for (PM QoS, /dev/cpu_dma_latency, as cyclictest does), us: idle CPUs '
+         'stay out of sleep states slower to leave. 0 keeps them polling (a sleeping '
+         'thread wakes at once; idle cores stay busy, costing power); -1 = leave the '
+         'system as it is. Needs root; refused with a warning otherwise',
+         -1, MAX_CPU_LATENCY, integer=True, read_only=True),
 )
 
 ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
@@ -157,6 +166,7 @@ class NodeSettings:
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
     realtime_priority: int = 50
+    cpu_dma_latency: int = 0
 
     @property
     def publish_period(self) -> float:

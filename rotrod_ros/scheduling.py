@@ -10,11 +10,18 @@ default) keeps a runaway real-time thread from locking up a core.
 Python threads share one interpreter lock: a real-time thread that wants it waits
 for the thread holding it to give it up, which CPython forces after the switch
 interval (5 ms by default). :data:`SWITCH_INTERVAL` shortens that wait.
+
+A thread woken on an idle CPU also waits for the CPU to leave its sleep (C-) state;
+in a virtual machine a halted vCPU must first be run again by the host, which is
+sometimes milliseconds late. :class:`CpuLatencyRequest` asks the kernel to keep idle
+CPUs out of states slower than that to wake (Linux PM QoS, ``/dev/cpu_dma_latency``,
+as cyclictest and tuned's latency-performance profile do), for as long as it is held.
 """
 
 from __future__ import annotations
 
 import os
+import struct
 import sys
 
 MAX_PRIORITY = 99
@@ -25,6 +32,14 @@ SWITCH_INTERVAL = 0.0005
 
 _ORDINARY_SWITCH_INTERVAL = sys.getswitchinterval()
 """The interpreter's switch interval before this module changed it, s."""
+
+CPU_DMA_LATENCY = '/dev/cpu_dma_latency'
+"""Linux's system-wide PM QoS CPU latency device: a request written to it (a 32-bit
+int, microseconds) holds while the file stays open; reading it gives the limit in
+force (the smallest request; 2000000000 with none)."""
+
+MAX_CPU_LATENCY = 1_000_000
+"""Largest CPU wake-up latency request accepted, us (1 s: beyond, no C-state differs)."""
 
 
 def supported() -> bool:
@@ -77,3 +92,62 @@ def current_thread_priority() -> int:
         return 0
     return os.sched_getparam(0).sched_priority
 
+
+
+class CpuLatencyRequest:
+    """A request that idle CPUs wake within a given latency, held until released.
+
+    :meth:`hold` asks the kernel (PM QoS) to keep every CPU out of idle states that
+    take longer than that many microseconds to leave; 0 keeps idle CPUs polling
+    instead of halting, so a sleeping thread wakes at once. The cost is power: idle
+    cores stay busy (in a virtual machine the host sees busy vCPUs). The request ends
+    with :meth:`release` or with the process (the kernel drops it when the file
+    closes).
+    """
+
+    def __init__(self, device: str = CPU_DMA_LATENCY):
+        self._device = device
+        self._fd: int | None = None
+        self.microseconds: int | None = None
+        """The latency held, us (None: none)."""
+
+    def hold(self, microseconds: int) -> str | None:
+        """Hold a limit of ``microseconds`` (0..MAX_CPU_LATENCY), replacing any held.
+
+        Returns None on success, else why it could not be done (nothing is then held).
+        """
+        if isinstance(microseconds, bool) or not isinstance(microseconds, int) or not (
+                0 <= microseconds <= MAX_CPU_LATENCY):
+            raise ValueError(f'CPU latency must be an integer in [0, {MAX_CPU_LATENCY}] us, '
+                             f'got {microseconds!r}')
+        try:
+            if self._fd is None:
+                self._fd = os.open(self._device, os.O_WRONLY | os.O_CLOEXEC)
+            # a later write on the same file updates this request
+            os.write(self._fd, struct.pack('=i', microseconds))
+        except OSError as exc:
+            self.release()
+            return (f'cannot hold a CPU wake-up latency of {microseconds} us through '
+                    f'{self._device}: {exc.strerror} (needs root)')
+        self.microseconds = microseconds
+        return None
+
+    def release(self) -> None:
+        """End the request (nothing if none is held)."""
+        if self._fd is not None:
+            os.close(self._fd)
+        self._fd = None
+        self.microseconds = None
+
+
+def cpu_latency_limit(device: str = CPU_DMA_LATENCY) -> int | None:
+    """The system-wide CPU wake-up latency limit in force, us (None: unreadable)."""
+    try:
+        fd = os.open(device, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return None
+    try:
+        data = os.read(fd, 4)
+    finally:
+        os.close(fd)
+    return struct.unpack('=i', data)[0] if len(data) == 4 else None

@@ -150,6 +150,8 @@ class SimulatorNode(Node):
         """SCHED_FIFO priority the physics thread runs at (0: ordinary)."""
         self._priority_refused: int | None = None
         """A priority the system refused (not asked for again)."""
+        self._cpu_latency = scheduling.CpuLatencyRequest()
+        self._cpu_latency_refused = False
         self._pacer = Pacer(self.settings.real_time_factor, 0.0, time.monotonic())
         self._stamps = StampClock(time.time() if not self.settings.publishes_clock else 0.0)
         self._countdown = 0
@@ -502,6 +504,7 @@ class SimulatorNode(Node):
         As fast as possible there is nothing to be on time for, and a real-time thread
         that never sleeps would starve ordinary ones; so it then runs as ordinary.
         """
+        self._hold_cpu_latency()
         want = self.settings.realtime_priority if self._pacer.paced else 0
         if want == self._priority or want == self._priority_refused:
             return
@@ -510,7 +513,33 @@ class SimulatorNode(Node):
         else:
             self._priority_refused = want
 
+    def _hold_cpu_latency(self) -> None:
+        """Hold the ``cpu_dma_latency`` request while paced; release it otherwise."""
+        want = self.settings.cpu_dma_latency if self._pacer.paced else -1
+        held = self._cpu_latency.microseconds
+        if want < 0:
+            if held is not None:
+                self._cpu_latency.release()
+                self.get_logger().info('cpu_dma_latency: released (not paced)')
+            return
+        if want == held or self._cpu_latency_refused:
+            return
+        problem = self._cpu_latency.hold(want)
+        if problem:
+            self._cpu_latency_refused = True
+            self.get_logger().warning(f'cpu_dma_latency: {problem}; idle CPUs may wake '
+                                      'late (set cpu_dma_latency:=-1 to not ask)')
+        else:
+            self.get_logger().info(f'cpu_dma_latency: idle CPUs wake within {want} us '
+                                   'while paced')
+
     def _run(self) -> None:
+        try:
+            self._run_physics()
+        finally:
+            self._cpu_latency.release()
+
+    def _run_physics(self) -> None:
         try:
             while not self._stop.is_set():
                 self._schedule()

@@ -92,3 +92,59 @@ def test_a_refusal_is_logged_with_its_reason_and_success_with_the_priority(monke
         log = Log()
         assert in_thread(lambda: scheduling.run_current_thread_at(20, log, 'streaming'))
         assert log.lines == [('info', 'streaming at SCHED_FIFO priority 20')]
+
+
+CAN_REQUEST_LATENCY = os.access(scheduling.CPU_DMA_LATENCY, os.W_OK)
+
+
+@pytest.mark.skipif(not CAN_REQUEST_LATENCY, reason='/dev/cpu_dma_latency needs root')
+def test_a_cpu_latency_request_holds_until_released_or_the_process_ends():
+    before = scheduling.cpu_latency_limit()
+    assert before is not None and before > 7
+    request = scheduling.CpuLatencyRequest()
+    assert request.hold(7) is None
+    assert scheduling.cpu_latency_limit() == 7 and request.microseconds == 7
+    assert request.hold(0) is None                 # the same request, tightened
+    assert scheduling.cpu_latency_limit() == 0
+    request.release()
+    assert scheduling.cpu_latency_limit() == before and request.microseconds is None
+    request.release()                              # twice: nothing to do
+    # a process killed while holding one: the kernel ends its request
+    code = ('import sys, time\nfrom rotrod_ros import scheduling as s\n'
+            'r = s.CpuLatencyRequest(); assert r.hold(0) is None\n'
+            'print("held", flush=True); time.sleep(60)\n')
+    child = subprocess.Popen([sys.executable, '-c', code], stdout=subprocess.PIPE, text=True,
+                             env={**os.environ, 'PYTHONPATH': os.pathsep.join(sys.path)})
+    try:
+        assert child.stdout.readline().strip() == 'held'
+        assert scheduling.cpu_latency_limit() == 0
+    finally:
+        child.kill()
+        child.wait()
+    assert scheduling.cpu_latency_limit() == before
+
+
+def test_a_cpu_latency_request_that_cannot_be_made_says_why_and_holds_nothing(tmp_path):
+    request = scheduling.CpuLatencyRequest(device=str(tmp_path / 'missing'))
+    reason = request.hold(0)
+    assert 'cannot hold a CPU wake-up latency of 0 us' in reason and 'needs root' in reason
+    assert request.microseconds is None
+    assert scheduling.cpu_latency_limit(str(tmp_path / 'missing')) is None
+
+
+@pytest.mark.skipif(not ROOT, reason='dropping to an unprivileged user needs root')
+def test_without_privilege_a_cpu_latency_request_is_refused():
+    code = ('import os\nfrom rotrod_ros import scheduling as s\n'
+            f'os.setgroups([]); os.setgid({NOBODY}); os.setuid({NOBODY})\n'
+            'r = s.CpuLatencyRequest(); print(r.hold(0)); print(r.microseconds)\n')
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         check=True, env={**os.environ, 'PYTHONPATH': os.pathsep.join(sys.path)})
+    reason, held = out.stdout.splitlines()
+    assert 'cannot hold a CPU wake-up latency' in reason and 'ermission denied' in reason
+    assert held == 'None'
+
+
+@pytest.mark.parametrize('bad', [-1, scheduling.MAX_CPU_LATENCY + 1, 1.5, True, '0', None])
+def test_a_cpu_latency_outside_its_range_is_an_error(bad):
+    with pytest.raises(ValueError, match='CPU latency must be an integer'):
+        scheduling.CpuLatencyRequest().hold(bad)

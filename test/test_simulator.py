@@ -380,6 +380,42 @@ def test_physics_and_executor_threads_run_at_realtime_priority(
     assert fifo_threads(off.pid) == []
 
 
+def cpu_latency_requests(pid: int) -> int:
+    """How many /dev/cpu_dma_latency requests process ``pid`` holds (its open files)."""
+    n = 0
+    for fd in os.listdir(f'/proc/{pid}/fd'):
+        try:
+            n += os.readlink(f'/proc/{pid}/fd/{fd}') == scheduling.CPU_DMA_LATENCY
+        except FileNotFoundError:
+            pass
+    return n
+
+
+@pytest.mark.skipif(not os.access(scheduling.CPU_DMA_LATENCY, os.W_OK),
+                    reason='/dev/cpu_dma_latency needs root')
+def test_while_paced_the_node_keeps_idle_cpus_awake_and_lets_go_after(
+        ros_processes, ros_node, request):
+    before = scheduling.cpu_latency_limit()
+    ns = namespace(request)
+    sim = start_simulator(ros_processes, ns)
+    sim.wait_for_output('cpu_dma_latency: idle CPUs wake within 0 us', timeout=10)
+    assert cpu_latency_requests(sim.pid) == 1 and scheduling.cpu_latency_limit() == 0
+    # as fast as possible there is nothing to be on time for: released
+    assert set_parameters(ros_node, ns, param('real_time_factor', 0.0)).results[0].successful
+    ros_node.spin_until(lambda: cpu_latency_requests(sim.pid) == 0, 10, 'released')
+    assert scheduling.cpu_latency_limit() == before
+    assert set_parameters(ros_node, ns, param('real_time_factor', 0.5)).results[0].successful
+    ros_node.spin_until(lambda: cpu_latency_requests(sim.pid) == 1, 10, 'held again')
+    # read-only, like realtime_priority
+    assert not set_parameters(ros_node, ns, param('cpu_dma_latency', 5)).results[0].successful
+    sim.stop()
+    assert scheduling.cpu_latency_limit() == before
+    # off by parameter
+    off = start_simulator(ros_processes, ns + '_off', cpu_dma_latency=-1)
+    ros_node.spin_for(0.5)
+    assert cpu_latency_requests(off.pid) == 0 and scheduling.cpu_latency_limit() == before
+
+
 def test_resets_in_quick_succession_keep_stamps_increasing_and_the_node_running(
         ros_processes, ros_node, request):
     # a reset lands while the physics thread is publishing what it computed before
