@@ -498,32 +498,38 @@ class SimulatorNode(Node):
             wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
         return samples, wake
 
-    def _schedule(self) -> None:
+    def _schedule(self) -> bool:
         """Run this (the physics) thread at ``realtime_priority`` while paced.
 
         As fast as possible there is nothing to be on time for, and a real-time thread
         that never sleeps would starve ordinary ones; so it then runs as ordinary.
+        Returns whether anything was changed (or tried and refused).
         """
-        self._hold_cpu_latency()
+        changed = self._hold_cpu_latency()
         want = self.settings.realtime_priority if self._pacer.paced else 0
         if want == self._priority or want == self._priority_refused:
-            return
+            return changed
         if scheduling.run_current_thread_at(want, self.get_logger(), 'physics thread'):
             self._priority = want
         else:
             self._priority_refused = want
+        return True
 
-    def _hold_cpu_latency(self) -> None:
-        """Hold the ``cpu_dma_latency`` request while paced; release it otherwise."""
+    def _hold_cpu_latency(self) -> bool:
+        """Hold the ``cpu_dma_latency`` request while paced; release it otherwise.
+
+        Returns whether anything was changed (or tried and refused).
+        """
         want = self.settings.cpu_dma_latency if self._pacer.paced else -1
         held = self._cpu_latency.microseconds
         if want < 0:
-            if held is not None:
-                self._cpu_latency.release()
-                self.get_logger().info('cpu_dma_latency: released (not paced)')
-            return
+            if held is None:
+                return False
+            self._cpu_latency.release()
+            self.get_logger().info('cpu_dma_latency: released (not paced)')
+            return True
         if want == held or self._cpu_latency_refused:
-            return
+            return False
         problem = self._cpu_latency.hold(want)
         if problem:
             self._cpu_latency_refused = True
@@ -532,6 +538,7 @@ class SimulatorNode(Node):
         else:
             self.get_logger().info(f'cpu_dma_latency: idle CPUs wake within {want} us '
                                    'while paced')
+        return True
 
     def _run(self) -> None:
         try:
@@ -542,7 +549,13 @@ class SimulatorNode(Node):
     def _run_physics(self) -> None:
         try:
             while not self._stop.is_set():
-                self._schedule()
+                if self._schedule():
+                    # the clock starts (or goes on) from here: the change and its log
+                    # lines took tens of ms at the node's start (measured: 44 ms), which
+                    # the first tick would otherwise have caught up on in a burst of
+                    # late publications
+                    with self._lock:
+                        self._restart_clock()
                 with self._lock:
                     self._apply_commands(deadline=time.monotonic() + TICK_COMMAND_BUDGET)
                     samples, wake = self._tick()
