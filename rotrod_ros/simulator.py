@@ -25,7 +25,8 @@ Services:
   ~/pause  std_srvs/SetBool   true: pause, false: resume
 
 Physics runs in its own thread at a fixed step (under SCHED_FIFO at
-``realtime_priority`` where the system permits); each tick integrates in whole steps
+``realtime_priority`` where the system permits, and holding a CPU wake-up latency
+request of ``cpu_dma_latency`` us while paced); each tick integrates in whole steps
 up to the simulated time due now (``real_time_factor`` x wall time), so simulated
 time does not drift from the clock. The ROS executor only handles commands,
 services and parameters; a command is queued with its arrival time and applied by
