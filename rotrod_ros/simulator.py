@@ -543,12 +543,6 @@ class SimulatorNode(Node):
 
     def _run(self) -> None:
         try:
-            self._run_physics()
-        finally:
-            self._cpu_latency.release()
-
-    def _run_physics(self) -> None:
-        try:
             while not self._stop.is_set():
                 if self._schedule():
                     # the clock starts (or goes on) from here: the change and its log
@@ -578,6 +572,8 @@ class SimulatorNode(Node):
             self._failure = f'physics thread failed: {exc!r}'
             self.get_logger().fatal(self._failure + '\n' + traceback.format_exc())
             self._publish_diagnostics(force=True)
+        finally:
+            self._cpu_latency.release()
 
     # ----------------------------------------------------------------- publishing
     def _publish(self, s: Sample, settings, config, estimator) -> None:

@@ -314,7 +314,9 @@ def test_table1_params_file_loads_and_bad_files_are_refused(ros_processes, tmp_p
         'simulator', '--ros-args', '-r', f'__ns:={ns}', '--params-file', str(table1))
     proc.wait_for_output('ready: drive=velocity, coupling=exact, physics 1000 Hz', timeout=30)
     for text, reason in [('mass: -0.3', 'mass'), ('physics_rate: 10.0', 'too low'),
-                         ("mass: 'heavy'", 'mass'), ('section: hexagonal', 'section')]:
+                         ("mass: 'heavy'", 'mass'), ('section: hexagonal', 'section'),
+                         ('cpu_dma_latency: -2', 'cpu_dma_latency'),
+                         ('cpu_dma_latency: 0.5', 'cpu_dma_latency')]:
         bad = tmp_path / 'bad.yaml'
         bad.write_text(f'/**:\n  ros__parameters:\n    {text}\n')
         proc = ros_processes.start_console_script(
