@@ -81,10 +81,17 @@ ENGINE_SPECS = (
     Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque, N m (> 0)',
          0.0, 1e9),
     Spec('deflection_limit', _ENGINE.deflection_limit,
-         'tip deflection sqrt(u^2 + v^2) beyond which the simulation halts (ERROR), m (> 0)',
-         0.0, 100.0),
+         'the critical deflection (the paper\'s 3 mm criterion), m (> 0): while the tip '
+         'deflection sqrt(u^2 + v^2) is beyond it, diagnostics are ERROR ("beyond the '
+         'critical deflection", with the first crossing and the peak); the simulation '
+         'goes on and accepts commands', 0.0, 100.0),
     Spec('warn_fraction', _ENGINE.warn_fraction,
          'fraction of deflection_limit above which diagnostics WARN, 1', 0.0, 1.0),
+    Spec('max_deflection_ratio', _ENGINE.max_deflection_ratio,
+         'model-validity bound on the tip deflection over the rod length, |r| / l, 1: '
+         'beyond it the small-deflection model means nothing (its foreshortening '
+         '0.6 (|r|/l)^2 is 0.6 % at 0.1) and the simulation halts at the last good state '
+         'until ~/reset; 0 = no bound', 0.0, 1.0),
     Spec('critical_margin', _ENGINE.critical_margin,
          'relative distance to a critical speed within which diagnostics WARN, 1', 0.0, 1.0),
     Spec('setpoint_delay', _ENGINE.setpoint_delay,
@@ -136,12 +143,13 @@ NODE_SPECS = (
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
          'warning otherwise', 0, 99, integer=True, read_only=True),
-    Spec('cpu_dma_latency', 0,
-         'while paced (real_time_factor > 0), the CPU wake-up latency the node asks the '
-         'kernel for (PM QoS, /dev/cpu_dma_latency, as cyclictest does), us: idle CPUs '
-         'stay out of sleep states slower to leave. 0 keeps them polling (a sleeping '
-         'thread wakes at once; idle cores stay busy, costing power); -1 = leave the '
-         'system as it is. Needs root; refused with a warning otherwise',
+    Spec('cpu_dma_latency', -1,
+         'machine-wide, opt-in (config/realtime.yaml): while paced (real_time_factor > 0), '
+         'the CPU wake-up latency the node asks the kernel for (PM QoS, '
+         '/dev/cpu_dma_latency, as cyclictest does), us: every idle CPU of the machine '
+         'stays out of sleep states slower to leave. 0 keeps them polling (a sleeping '
+         'thread wakes at once; idle cores stay busy, costing power); -1 (default) = '
+         'leave the machine as it is. Needs root; refused with a warning otherwise',
          -1, MAX_CPU_LATENCY, integer=True, read_only=True),
 )
 
@@ -166,7 +174,7 @@ class NodeSettings:
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
     realtime_priority: int = 50
-    cpu_dma_latency: int = 0
+    cpu_dma_latency: int = -1
 
     @property
     def publish_period(self) -> float:
