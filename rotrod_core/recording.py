@@ -134,7 +134,15 @@ class RecordingWriter:
 
     def trigger(self) -> None:
         """Start recording (armed writers): the kept pretrigger seconds are written first."""
+        if self.armed:
+            self._trim()
         self.armed = False
+
+    def _trim(self) -> None:
+        """Drop what is older than ``pretrigger`` before the latest stamp (armed)."""
+        oldest = self.last_time - self.pretrigger if self.last_time is not None else 0.0
+        for rows in self._buffers.values():
+            rows[:] = [r for r in rows if r[0] >= oldest]
 
     def add_deflection(self, t: float, u: float, v: float) -> None:
         """Tip deflection (m) in the rotating frame at stamp time ``t`` (s)."""
@@ -165,9 +173,7 @@ class RecordingWriter:
 
     def _send(self) -> None:
         if self.armed:
-            oldest = self.last_time - self.pretrigger if self.last_time is not None else 0.0
-            for rows in self._buffers.values():
-                rows[:] = [r for r in rows if r[0] >= oldest]
+            self._trim()
             return
         rr = self._rr
         for entity, rows in self._buffers.items():

@@ -9,9 +9,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped, Vector3Stamped
-from node_probes import collect, namespace, stamp, start_simulator
-from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-from rcl_interfaces.srv import GetParameters, SetParameters
+from node_probes import (
+    by_time,
+    collect,
+    get_parameter,
+    hann_mean,
+    namespace,
+    omega_publisher,
+    param,
+    set_parameters,
+    stamp,
+    start_simulator,
+)
 from reference import R0, W0, K, M, eq26
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -23,50 +32,6 @@ from rotrod_ros import scheduling
 pytestmark = pytest.mark.ros
 
 FAST = 4.0          # real_time_factor for tests that do not need wall-clock pacing
-
-
-def by_time(joint, deflection):
-    """Join joint_states and tip/deflection on their stamps: rows t, theta, w, Q, u, v."""
-    d = {stamp(m): (m.vector.x, m.vector.y) for m in deflection}
-    rows = [(stamp(j), j.position[0], j.velocity[0], j.effort[0], *d[stamp(j)])
-            for j in joint if stamp(j) in d]
-    return np.array(sorted(rows))
-
-
-def hann_mean(x):
-    w = np.hanning(len(x))
-    return float(np.sum(w * x) / np.sum(w))
-
-
-def param(name, value) -> Parameter:
-    if isinstance(value, str):
-        v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
-    elif isinstance(value, float):
-        v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
-    elif isinstance(value, int) and not isinstance(value, bool):
-        v = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
-    else:
-        raise TypeError(value)
-    return Parameter(name=name, value=v)
-
-
-def set_parameters(node, ns, *params):
-    req = SetParameters.Request(parameters=list(params))
-    return node.call_service(SetParameters, f'{ns}/rotrod_simulator/set_parameters', req)
-
-
-def get_parameter(node, ns, name):
-    req = GetParameters.Request(names=[name])
-    value = node.call_service(GetParameters, f'{ns}/rotrod_simulator/get_parameters', req)
-    v = value.values[0]
-    return {ParameterType.PARAMETER_DOUBLE: v.double_value,
-            ParameterType.PARAMETER_STRING: v.string_value}[v.type]
-
-
-def omega_publisher(node, ns):
-    pub = node.node.create_publisher(Float64, f'{ns}/cmd/omega', 1000)   # lossless burst
-    node.spin_until(lambda: pub.get_subscription_count() > 0, 10, 'cmd/omega subscriber')
-    return pub
 
 
 def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
@@ -268,29 +233,6 @@ def test_pause_stops_simulated_time_and_resume_continues(ros_processes, ros_node
     ros_node.spin_until(lambda: len(joint) > n + 10, 10, 'publishing again')
     stamps = [stamp(m) for m in joint]
     assert np.all(np.diff(stamps) > 0)
-
-
-def test_the_deflection_limit_halts_until_reset(ros_processes, ros_node, request):
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    ns = namespace(request)
-    sim = start_simulator(ros_processes, ns, real_time_factor=FAST)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
-    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=100)
-    omega_publisher(ros_node, ns).publish(Float64(data=3.0))   # beyond w_cr = 2.07 rad/s
-
-    def status(level):
-        return [s for d in diags for s in d.status
-                if s.name.startswith(f'{ns}/rotrod_simulator') and s.level == level]
-    ros_node.spin_until(lambda: status(DiagnosticStatus.ERROR), 30, 'ERROR diagnostics')
-    assert status(DiagnosticStatus.WARN)                   # it warned first
-    assert 'beyond the limit' in status(DiagnosticStatus.ERROR)[-1].message
-    sim.wait_for_output('simulation halted', timeout=5)
-    n = len(joint)
-    ros_node.spin_for(0.5)
-    assert len(joint) <= n + 1                              # halted: nothing new
-    assert ros_node.call_service(Trigger, f'{ns}/rotrod_simulator/reset').success
-    ros_node.spin_until(lambda: len(joint) > n + 5 and joint[-1].velocity[0] == 0.0, 10,
-                        'running again at rest')
 
 
 def test_two_namespaced_simulators_do_not_cross_talk(ros_processes, ros_node, request):
