@@ -1,6 +1,6 @@
 """Equations of motion of the tip mass on a rod on a rotating hub (rotating frame).
 
-The single source of truth for the dynamics (see MODEL.md). State
+The single source of truth for the dynamics (see docs/model.md). State
 ``(u, v, du, dv, theta, omega)``: deflection u (radial, e1) and v (tangential, e2) of
 the mass in m, their rates in m/s, hub angle theta in rad and angular velocity omega
 in rad/s. Every function is plain arithmetic, so it accepts Python floats (fast, for
@@ -127,7 +127,7 @@ def deflection_accelerations(co: Coefficients, u, v, du, dv, omega, omega_dot):
     """Accelerations (u'', v'') of the mass in the rotating frame, m/s^2.
 
     Eqs. 16 and 17 of the paper (with the sign of the tangential initial force as
-    derived in MODEL.md), with radial/tangential stiffness k1, k2 and rotating damping.
+    derived in docs/model.md), with radial/tangential stiffness k1, k2 and rotating damping.
     ``omega`` and ``omega_dot`` (rad/s, rad/s^2) are the hub's at this instant.
     """
     w2 = omega * omega

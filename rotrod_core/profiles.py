@@ -238,7 +238,7 @@ class StepProfile(Profile):
     w = omega_before for t < t_step, omega for t >= t_step. With t_step > 0 the jump
     is applied physically (the mass keeps its absolute velocity: from rest this is the
     "impulsive" start). With t_step = 0 the run starts in the frame already turning
-    at ``omega`` (from rest in that frame: the "step" start of MODEL.md).
+    at ``omega`` (from rest in that frame: the "step" start of docs/model.md).
 
     Attributes:
         omega_after: w after the step, rad/s.

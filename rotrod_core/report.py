@@ -38,7 +38,7 @@ def _speed(w: float) -> str:
 
 def fact_table(facts: list) -> str:
     """The fact table: where, claim, paper's number, closed form, measured, verdict."""
-    header = ['#', 'where', 'the paper says', "paper's number", 'closed form (MODEL.md)',
+    header = ['#', 'where', 'the paper says', "paper's number", 'closed form (docs/model.md)',
               'measured now', 'verdict']
     rows = [[i, f.where, f.claim, f.paper_value, f.closed_form, f.measured, f'**{f.verdict}**']
             for i, f in enumerate(facts, 1)]
@@ -145,7 +145,7 @@ def paper_report(*, facts, stages, frequencies, critical, limit, figures, record
         'simulated run of 40 s from u = 0.1 mm at each constant speed.',
         frequency_table(frequencies),
         f'## Critical speed vs eccentricity for a {MM * limit:.1f} mm limit (Fig. 10)',
-        'Closed forms of MODEL.md for three starts; numerical: the largest peak speed whose '
+        'Closed forms of docs/model.md for three starts; numerical: the largest peak speed whose '
         'run from rest keeps |r| within the limit (Eq. 26 shape rescaled; a step to '
         'constant speed in the rotating frame, 20 s runs).',
         critical_table(critical),

@@ -10,7 +10,7 @@ matched it too), then streams for ``duration`` seconds (0: to the profile's end)
 start and end, and exits, unless ``loop`` (start over) or ``hold`` (keep publishing
 the last value) is set.
 
-Profiles (rotrod_core.profiles): eq26 (period, omega_max: MODEL.md's Eq. 26),
+Profiles (rotrod_core.profiles): eq26 (period, omega_max: docs/model.md's Eq. 26),
 constant (omega_max), step (omega_before -> omega_max at t_step), ramp (0 -> omega_max
 over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
 f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).

@@ -216,7 +216,7 @@ def test_fact_table_rows_match_model_md(reproduced):
     u_s = 1e3 * M * 4 * R0 / (M * W0**2 - M * 4)
     hold = row('Fig. 6', 'centrifugal')
     assert f'{u_s:.4f} mm' == '2.7921 mm'
-    assert f'= {u_s:.4f} mm at w = 2 rad/s' in hold['closed form (MODEL.md)']
+    assert f'= {u_s:.4f} mm at w = 2 rad/s' in hold['closed form (docs/model.md)']
     assert numbers(hold['measured now'])[-1] == pytest.approx(u_s, abs=1e-4)
     assert hold['verdict'] == '**agrees**'
     freq = row('Eq. 28', 'dynamic frequencies')
