@@ -72,9 +72,9 @@ class EngineConfig:
         physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
         max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
             The hub's angular acceleration bends the rod backwards: quasi-statically
-            v = -w' r0 m / k2 (0.68 mm per rad/s^2 for Table 1), up to twice that
-            when w' is applied suddenly. A bound whose quasi-static bending alone
-            exceeds ``deflection_limit`` is refused.
+            v = -w' r0 Me / k2 (Me = m for a massless rod; 0.68 mm per rad/s^2 for
+            Table 1), up to twice that when w' is applied suddenly. A bound whose
+            quasi-static bending alone exceeds ``deflection_limit`` is refused.
         max_omega: largest |w| accepted as a setpoint, and reached in torque drive
             before the simulation halts, rad/s.
         max_torque: largest |Q| accepted as a torque command, N m.
@@ -153,7 +153,7 @@ class EngineConfig:
         if bend > self.deflection_limit:
             raise ValueError(
                 f'max_angular_acceleration {self.max_angular_acceleration:g} rad/s^2 bends the '
-                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 m / k2), beyond '
+                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 Me / k2), beyond '
                 f'the {self.deflection_limit * 1e3:.3g} mm deflection_limit: every ramp at '
                 'that rate would halt the simulation')
         try:
