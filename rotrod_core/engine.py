@@ -156,6 +156,9 @@ class EngineConfig:
                 f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 Me / k2), beyond '
                 f'the {self.deflection_limit * 1e3:.3g} mm deflection_limit: every ramp at '
                 'that rate would halt the simulation')
+        # the setpoint shaper's own limits (e.g. the largest change of w in a stall),
+        # refused here with its reason rather than when the engine starts
+        OmegaSetpointShaper(self.max_angular_acceleration, delay=self.setpoint_delay)
         try:
             initial = dict(self.initial)
         except (TypeError, ValueError):
