@@ -27,10 +27,12 @@ from .simulate import simulate
 from .stages import format_stage_table, stage_extremes
 
 PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
-                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness')
+                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness',
+                'gravity', 'rod_density')
 UNITS = {'mass': 'kg', 'rod_length': 'm', 'rod_diameter': 'm', 'youngs_modulus': 'Pa',
          'eccentricity': 'm', 'hub_inertia': 'kg m^2', 'damping_ratio': '-',
-         'section_width': 'm', 'section_thickness': 'm'}
+         'section_width': 'm', 'section_thickness': 'm', 'gravity': 'm/s^2',
+         'rod_density': 'kg/m^3'}
 
 
 def _finite(text: str) -> float:

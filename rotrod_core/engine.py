@@ -100,9 +100,10 @@ class EngineConfig:
         physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
         max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
             The hub's angular acceleration bends the rod backwards: quasi-statically
-            v = -w' r0 m / k2 (0.68 mm per rad/s^2 for Table 1), up to twice that
-            when w' is applied suddenly. A bound whose quasi-static bending alone
-            exceeds the validity bound (``max_deflection_ratio`` x l) is refused.
+            v = -w' r0 Me / k2 (Me = m for a massless rod; 0.68 mm per rad/s^2 for
+            Table 1), up to twice that when w' is applied suddenly. A bound whose
+            quasi-static bending alone exceeds the validity bound
+            (``max_deflection_ratio`` x l) is refused.
         max_omega: largest |w| accepted as a setpoint, and reached in torque drive
             before the simulation halts, rad/s. The step is sized for it (see
             ``physics_rate``), so beyond it the integration is not trusted.
@@ -193,10 +194,13 @@ class EngineConfig:
         if bend > self.max_deflection:
             raise ValueError(
                 f'max_angular_acceleration {self.max_angular_acceleration:g} rad/s^2 bends the '
-                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 m / k2), beyond '
+                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 Me / k2), beyond '
                 f'the model\'s validity bound {self.max_deflection * 1e3:.3g} mm '
                 f'(max_deflection_ratio {self.max_deflection_ratio:g} x rod length): every '
                 'ramp at that rate would halt the simulation')
+        # the setpoint shaper's own limits (e.g. the largest change of w in a stall),
+        # refused here with its reason rather than when the engine starts
+        OmegaSetpointShaper(self.max_angular_acceleration, delay=self.setpoint_delay)
         try:
             initial = dict(self.initial)
         except (TypeError, ValueError):
