@@ -61,6 +61,13 @@ ROD_SPECS = (
     Spec('section_thickness', 0.0,
          'rectangular section size h along e2 (tangential), m; 0 = unused (circular)',
          0.0, 10.0),
+    Spec('gravity', _ROD.gravity,
+         'gravity along the rod, m/s^2: > 0 the rod stands up with the mass on top (its '
+         'weight compresses and softens it), < 0 it hangs (tension stiffens it), 0 = the '
+         'paper; compression at or past buckling is refused', -1e3, 1e3),
+    Spec('rod_density', _ROD.rod_density,
+         "density of the rod's material, kg/m^3 (one-mode Rayleigh-Ritz: modal mass "
+         'm + 33/140 rho A l); 0 = massless, the paper', 0.0, 1e5),
 )
 
 ENGINE_SPECS = (

@@ -336,3 +336,45 @@ def test_a_halt_on_the_validity_bound_then_reset_and_normal_operation(
     assert centre.real == pytest.approx(static_deflection(1.0), rel=0.01) and residual < 1e-3
     ros_node.spin_until(lambda: obs.statuses()[-1].level == DiagnosticStatus.OK, 10,
                         'diagnostics OK')
+
+
+def test_the_real_rig_params_file_settles_at_its_softened_static_deflection(
+        ros_processes, ros_node, request):
+    """config/real_rig.yaml: Table 1 upright under gravity with a steel rod (issue 18)."""
+    from pathlib import Path
+    config = Path(__file__).resolve().parent.parent / 'config'
+    ns = namespace(request)
+    sim = ros_processes.start_console_script(
+        'simulator', '--ros-args', '-r', f'__ns:={ns}',
+        '--params-file', str(config / 'table1.yaml'),
+        '--params-file', str(config / 'real_rig.yaml'), '-p', f'real_time_factor:={FAST}',
+        name=ns.strip('/'))
+    sim.wait_for_output('ready', timeout=30)
+    obs = Observer(ros_node, ns)
+    omega_publisher(ros_node, ns).publish(Float64(data=1.5))
+    t_reached = obs.wait_for_omega(1.5)
+    obs.wait_until(t_reached + 8.0)
+    # docs/real_rig.md, written out here: exact tip-load stiffness, the rod's weight as
+    # a Rayleigh geometric stiffness, one-mode Rayleigh-Ritz masses
+    g, rho = 9.81, 7850.0
+    area = math.pi * 0.003**2 / 4
+    ei = 100e9 * math.pi * 0.003**4 / 64
+    kappa = math.sqrt(M * g / ei)
+    k = M * g / (math.tan(kappa * 0.3) / kappa - 0.3) - 3 / 8 * rho * area * g
+    modal = M + 33 / 140 * rho * area * 0.3
+    eccentric = M + 3 / 8 * rho * area * 0.3
+    us = eccentric * 1.5**2 * R0 / (k - modal * 1.5**2)
+    hold = obs.hold(t_reached + 1.0)
+    w0 = math.sqrt(k / modal)
+    t = hold[:, 0] - hold[0, 0]
+    z = hold[:, 4] + 1j * hold[:, 5]
+    basis = np.column_stack([np.ones_like(t), np.exp(1j * (w0 - 1.5) * t),
+                             np.exp(-1j * (w0 + 1.5) * t)])
+    coef, *_ = np.linalg.lstsq(basis, z, rcond=None)
+    residual = np.sqrt(np.mean(np.abs(z - basis @ coef) ** 2))
+    assert coef[0].real == pytest.approx(us, rel=0.01)
+    assert residual < 1e-3 * (abs(coef[1]) + abs(coef[2]))
+    assert us > static_deflection(1.5) * 1.3                      # softer than the paper's
+    f1, f2 = obs.frequencies[-1].data
+    assert (f1, f2) == (pytest.approx((w0 - 1.5) / (2 * math.pi), rel=1e-6),
+                        pytest.approx((w0 + 1.5) / (2 * math.pi), rel=1e-6))
