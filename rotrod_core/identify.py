@@ -185,6 +185,13 @@ class _Record:
     wd2: np.ndarray
     slopes: np.ndarray
 
+    def __post_init__(self):
+        # kappa - a = -w^2 + i w' and 2 i w at the Gauss points (the forcing is -(kappa - a))
+        self.k1 = -self.w1**2 + 1j * self.wd1
+        self.k2 = -self.w2**2 + 1j * self.wd2
+        self.i2w1 = 2j * self.w1
+        self.i2w2 = 2j * self.w2
+
     @property
     def n(self) -> int:
         return len(self.t)
@@ -248,122 +255,162 @@ def _record(t, u, v, omega, omega_dot=None) -> _Record:
 
 # -- the model: z(t) and its sensitivities for given (a, g) ------------------------------
 
-def _affine_expm(X, b, dX, db):
+def _mul2(A, B):
+    """Product of 2x2 matrices given as component tuples (a00, a01, a10, a11)."""
+    return (A[0] * B[0] + A[1] * B[2], A[0] * B[1] + A[1] * B[3],
+            A[2] * B[0] + A[3] * B[2], A[2] * B[1] + A[3] * B[3])
+
+
+def _affine_expm(x, b, dx10, dx11, db1):
     """Exponential of [[X, b], [0, 0]] for 2x2 complex X, with derivatives.
 
-    Returns (E, phi) = (e^X, phi1(X) b) and their directional derivatives (dE, dphi)
-    for the directions (dX, db) (leading axis).
+    ``x`` = (x00, x01, x10, x11) and ``b`` = (b0, b1) are arrays over the steps; the
+    directions (leading axis of ``dx10``, ``dx11``, ``db1``) change only x10, x11 and
+    b1. Returns the components (e00, e01, e10, e11) of e^X and (phi0, phi1) of
+    phi1(X) b, each of shape (1 + directions, steps): the value, then the directional
+    derivatives.
 
     Cayley-Hamilton: X^k = p_k X + q_k I, so e^X and phi1(X) = sum X^k / (k+1)! are
-    P X + Q I and P1 X + Q1 I with scalar series; scaling and squaring for long steps.
+    P X + Q I and P1 X + Q1 I with scalar series (the derivatives follow the same
+    recurrences); scaling and squaring for long steps.
     """
-    tau = X[:, 0, 0] + X[:, 1, 1]
-    det = X[:, 0, 0] * X[:, 1, 1] - X[:, 0, 1] * X[:, 1, 0]
+    x00, x01, x10, x11 = x
+    b0, b1 = b
+    tau = x00 + x11
+    det = x00 * x11 - x01 * x10
     rho = float(np.max(0.5 * np.abs(tau) + np.sqrt(np.abs(0.25 * tau * tau - det)),
                        initial=0.0))
     s = max(0, math.ceil(math.log2(rho / 0.5))) if rho > 0.5 else 0
     if s:
-        scale = 0.5**s
-        X, b, dX, db = X * scale, b * scale, dX * scale, db * scale
-        tau, det, rho = tau * scale, det * scale**2, rho * scale
-    dtau = dX[:, :, 0, 0] + dX[:, :, 1, 1]
-    ddet = (dX[:, :, 0, 0] * X[:, 1, 1] + X[:, 0, 0] * dX[:, :, 1, 1]
-            - dX[:, :, 0, 1] * X[:, 1, 0] - X[:, 0, 1] * dX[:, :, 1, 0])
-    n, m = len(tau), dX.shape[0]
-    p = np.zeros(n, dtype=complex)
-    q = np.ones(n, dtype=complex)
-    dp = np.zeros((m, n), dtype=complex)
-    dq = np.zeros((m, n), dtype=complex)
+        f = 0.5**s
+        x00, x01, x10, x11, b0, b1 = (c * f for c in (x00, x01, x10, x11, b0, b1))
+        dx10, dx11, db1 = dx10 * f, dx11 * f, db1 * f
+        tau, det, rho = tau * f, det * f * f, rho * f
+    dtau = dx11
+    ddet = x00 * dx11 - x01 * dx10
+    m, n = dx10.shape
+    p = np.zeros((1 + m, n), dtype=complex)
+    q = np.zeros((1 + m, n), dtype=complex)
+    q[0] = 1.0
     P, Q, P1, Q1 = p.copy(), q.copy(), p.copy(), q.copy()
-    dP, dQ, dP1, dQ1 = dp.copy(), dq.copy(), dp.copy(), dq.copy()
     k, bound = 0, 1.0
     while bound > _TERM_TOLERANCE and k < 60:
         k += 1
-        p, q, dp, dq = ((tau * p + q) / k, -det * p / k,
-                        (tau * dp + dtau * p + dq) / k, -(det * dp + ddet * p) / k)
+        p0 = p[0]
+        p, q = tau * p + q, -det * p
+        p[1:] += dtau * p0
+        q[1:] -= ddet * p0
+        p /= k
+        q /= k
         P += p
         Q += q
-        dP += dp
-        dQ += dq
         P1 += p / (k + 1)
         Q1 += q / (k + 1)
-        dP1 += dp / (k + 1)
-        dQ1 += dq / (k + 1)
         bound = bound * max(rho, 1e-300) / k if k > 1 else 1.0
-    eye = np.eye(2)
-    E = P[:, None, None] * X + Q[:, None, None] * eye
-    F = P1[:, None, None] * X + Q1[:, None, None] * eye
-    phi = np.einsum('nij,nj->ni', F, b)
-    dE = dP[..., None, None] * X + P[:, None, None] * dX + dQ[..., None, None] * eye
-    dF = dP1[..., None, None] * X + P1[:, None, None] * dX + dQ1[..., None, None] * eye
-    dphi = np.einsum('mnij,nj->mni', dF, b) + np.einsum('nij,mnj->mni', F, db)
-    for _ in range(s):
-        dE, dphi = (dE @ E + E @ dE,
-                    np.einsum('mnij,nj->mni', dE, phi) + np.einsum('nij,mnj->mni', E, dphi)
-                    + dphi)
-        phi = np.einsum('nij,nj->ni', E, phi) + phi
-        E = E @ E
-    return E, phi, dE, dphi
+
+    def combine(P, Q):
+        M = [P * x00 + Q, P * x01, P * x10, P * x11 + Q]
+        M[2][1:] += P[0] * dx10
+        M[3][1:] += P[0] * dx11
+        return M
+
+    E = combine(P, Q)
+    F = combine(P1, Q1)
+    phi = [F[0] * b0 + F[1] * b1, F[2] * b0 + F[3] * b1]
+    phi[0][1:] += F[1][0] * db1
+    phi[1][1:] += F[3][0] * db1
+    for _ in range(s):      # (E, phi)^2 = (E E, E phi + phi), with derivatives
+        e = [c[0] for c in E]
+        de = [c[1:] for c in E]
+        ph = [c[0] for c in phi]
+        dph = [c[1:] for c in phi]
+        d_e = [u + v for u, v in zip(_mul2(de, e), _mul2(e, de))]
+        d_phi = [de[0] * ph[0] + de[1] * ph[1] + e[0] * dph[0] + e[1] * dph[1] + dph[0],
+                 de[2] * ph[0] + de[3] * ph[1] + e[2] * dph[0] + e[3] * dph[1] + dph[1]]
+        e2 = _mul2(e, e)
+        ph2 = [e[0] * ph[0] + e[1] * ph[1] + ph[0], e[2] * ph[0] + e[3] * ph[1] + ph[1]]
+        E = [np.concatenate([v[None], dv]) for v, dv in zip(e2, d_e)]
+        phi = [np.concatenate([v[None], dv]) for v, dv in zip(ph2, d_phi)]
+    return E, phi
 
 
-def _step_matrices(rec: _Record, a: float, g: float) -> np.ndarray:
+def _step_matrices(rec: _Record, a: float, g: float, out=None) -> np.ndarray:
     """Magnus step matrices (n-1, 7, 7) of (z, z', r0, dz/da, dz'/da, dz/dg, dz'/dg).
 
     Fourth-order Magnus on x' = [[X(t), b(t)], [0, 0]] x, x = (z, z', r0):
     X = [[0, 1], [-kappa, -gamma]], kappa = a - w^2 + i w', gamma = g + 2 i w,
     b = (0, w^2 - i w'). The sensitivities obey the same equation, forced by the
     derivative of the step matrix (the Frechet derivative of its exponential).
+    Written into ``out`` (a :class:`_Workspace` buffer) when given.
     """
     h = rec.h
     c = _MAGNUS_C * h * h
-    k1 = a - rec.w1**2 + 1j * rec.wd1
-    k2 = a - rec.w2**2 + 1j * rec.wd2
-    g1, g2 = g + 2j * rec.w1, g + 2j * rec.w2
-    f1, f2 = rec.w1**2 - 1j * rec.wd1, rec.w2**2 - 1j * rec.wd2
+    k1 = a + rec.k1
+    k2 = a + rec.k2
+    g1, g2 = g + rec.i2w1, g + rec.i2w2
+    f1, f2 = -rec.k1, -rec.k2
+    x = (c * (k2 - k1), h + c * (g2 - g1), -0.5 * h * (k1 + k2) + c * (g2 * k1 - g1 * k2),
+         -0.5 * h * (g1 + g2) + c * (k1 - k2))
+    b = (c * (f1 - f2), 0.5 * h * (f1 + f2) + c * (g1 * f2 - g2 * f1))
     n = len(h)
-    X = np.empty((n, 2, 2), dtype=complex)
-    X[:, 0, 0] = c * (k2 - k1)
-    X[:, 0, 1] = h + c * (g2 - g1)
-    X[:, 1, 0] = -0.5 * h * (k1 + k2) + c * (g2 * k1 - g1 * k2)
-    X[:, 1, 1] = -0.5 * h * (g1 + g2) + c * (k1 - k2)
-    b = np.empty((n, 2), dtype=complex)
-    b[:, 0] = c * (f1 - f2)
-    b[:, 1] = 0.5 * h * (f1 + f2) + c * (g1 * f2 - g2 * f1)
-    dX = np.zeros((2, n, 2, 2), dtype=complex)
-    db = np.zeros((2, n, 2), dtype=complex)
-    dX[0, :, 1, 0] = -h + c * (g2 - g1)         # d/da
-    dX[1, :, 1, 0] = c * (k1 - k2)              # d/dg
-    dX[1, :, 1, 1] = -h
-    db[1, :, 1] = c * (f2 - f1)
-    E, phi, dE, dphi = _affine_expm(X, b, dX, db)
-    S = np.zeros((n, 7, 7), dtype=complex)
-    S[:, 0:2, 0:2] = E
-    S[:, 0:2, 2] = phi
+    zero = np.zeros(n)
+    dx10 = np.stack([-h + c * (g2 - g1), c * (k1 - k2)])     # d/da, d/dg
+    dx11 = np.stack([zero, -h])
+    db1 = np.stack([zero, c * (f2 - f1)])
+    E, phi = _affine_expm(x, b, dx10, dx11, db1)
+    S = np.zeros((n, 7, 7), dtype=complex) if out is None else out[:n]
     S[:, 2, 2] = 1.0
-    for j, row in enumerate((3, 5)):
-        S[:, row:row + 2, 0:2] = dE[j]
-        S[:, row:row + 2, 2] = dphi[j]
-        S[:, row:row + 2, row:row + 2] = E
-    return S
+    for j, row in enumerate((0, 3, 5)):
+        S[:, row, 0], S[:, row, 1], S[:, row + 1, 0], S[:, row + 1, 1] = (
+            E[0][j], E[1][j], E[2][j], E[3][j])
+        S[:, row, 2], S[:, row + 1, 2] = phi[0][j], phi[1][j]
+        if row:
+            S[:, row, row], S[:, row, row + 1] = E[0][0], E[1][0]
+            S[:, row + 1, row], S[:, row + 1, row + 1] = E[2][0], E[3][0]
+    return S if out is None else out
 
 
-def _chain(S: np.ndarray) -> np.ndarray:
+class _Workspace:
+    """Buffers of the step matrices and their products, kept between evaluations.
+
+    Fresh arrays of this size (~1 MB for 1000 samples) are mapped from the system on
+    every allocation and cost more in page faults than the arithmetic in them.
+    """
+
+    def __init__(self):
+        self.n = -1
+
+    def steps(self, n: int) -> np.ndarray:
+        """A zeroed (n padded to blocks, 7, 7) buffer; the padding is the identity."""
+        if n != self.n:
+            self.n = n
+            self.block = max(1, int(math.sqrt(n)))
+            self.blocks = -(-n // self.block)
+            size = self.blocks * self.block
+            self.S = np.zeros((size, 7, 7), dtype=complex)
+            self.S[n:] = np.eye(7)
+            self.cum = np.empty((self.blocks, self.block, 7, 7), dtype=complex)
+            self.out = np.empty((size + 1, 3, 3), dtype=complex)
+        return self.S
+
+
+def _chain(S: np.ndarray, n: int | None = None, work: _Workspace | None = None) -> np.ndarray:
     """Rows (z, dz/da, dz/dg) of the products S_k ... S_0 on unit initial states.
 
     The initial states are (z0, z0', r0) = the unit vectors: shape (n+1, 3, 3),
-    [k, row, initial component].
-
-    Blocked: products within blocks of ~sqrt(n) steps for all blocks at once, then the
-    blocks chained sequentially (as :func:`rotrod_core.simulate.affine_chain`).
+    [k, row, initial component]. Blocked: products within blocks of ~sqrt(n) steps for
+    all blocks at once, then the blocks chained sequentially (as
+    :func:`rotrod_core.simulate.affine_chain`). With ``work``, S is its padded buffer
+    and n the number of steps.
     """
-    n, d = S.shape[0], S.shape[1]
-    B = max(1, int(math.sqrt(n)))
-    nb = -(-n // B)
-    pad = nb * B - n
-    if pad:
-        S = np.concatenate([S, np.broadcast_to(np.eye(d), (pad, d, d))])
+    d = S.shape[1]
+    if work is None:
+        n = S.shape[0]
+        work = _Workspace()
+        work.steps(n)[:n] = S
+    S, B, nb = work.S, work.block, work.blocks
     P = S.reshape(nb, B, d, d)
-    cum = np.empty_like(P)
+    cum = work.cum
     cum[:, 0] = P[:, 0]
     for j in range(1, B):
         np.matmul(P[:, j], cum[:, j - 1], out=cum[:, j])
@@ -373,9 +420,9 @@ def _chain(S: np.ndarray) -> np.ndarray:
         starts[i] = x
         x = cum[i, -1] @ x
     rows = [0, 3, 5]
-    out = np.empty((nb * B + 1, 3, 3), dtype=complex)
+    out = work.out
     out[0] = np.eye(d, 3)[rows]
-    out[1:] = np.matmul(cum[:, :, rows, :], starts[:, None]).reshape(-1, 3, 3)
+    np.matmul(cum[:, :, rows, :], starts[:, None], out=out[1:].reshape(nb, B, 3, 3))
     return out[:n + 1]
 
 
@@ -401,8 +448,9 @@ class _Point:
 class _Problem:
     """Output-error least squares for one record, with some parameters fixed."""
 
-    def __init__(self, rec: _Record, zeta=None, r0=None):
+    def __init__(self, rec: _Record, zeta=None, r0=None, work: _Workspace | None = None):
         self.rec = rec
+        self.work = work or _Workspace()
         self.zeta = zeta        # fixed damping ratio (g = 2 zeta sqrt(a)), or None
         self.r0 = r0            # fixed eccentricity, or None
         self.y = _stack(rec.z[:, None])[:, 0]
@@ -416,8 +464,9 @@ class _Problem:
     def evaluate(self, a: float, g: float) -> _Point | None:
         """The fit of the linear parameters at (a, g); None if the model overflows."""
         g = self.g_of(a, g)
+        n = self.rec.n - 1
         with np.errstate(all='ignore'):
-            Y = _chain(_step_matrices(self.rec, a, g))
+            Y = _chain(_step_matrices(self.rec, a, g, out=self.work.steps(n)), n, self.work)
         if not np.all(np.isfinite(Y)):
             return None
         basis, da, dg = Y[:, 0, :], Y[:, 1, :], Y[:, 2, :]
@@ -454,11 +503,23 @@ def _scaled(J):
     return J / safe, safe, norms
 
 
+def _moved(point: _Point, step: np.ndarray, k_nl: int) -> _Point:
+    """``point`` moved by a Gauss-Newton step, linearized (no new evaluation)."""
+    residual = point.residual - point.jacobian @ step
+    linear = point.linear + step[k_nl:]
+    g = point.g + step[1] if k_nl == 2 else point.g
+    r0 = float(linear[4]) if len(linear) > 4 else point.r0
+    return dataclasses.replace(point, a=point.a + float(step[0]), g=g, linear=linear, r0=r0,
+                               residual=residual, rss=float(residual @ residual))
+
+
 def _refine(problem: _Problem, a: float, g: float, max_iterations=_MAX_ITERATIONS,
-            point: _Point | None = None):
+            point: _Point | None = None, lazy: bool = False):
     """Levenberg-Marquardt over the nonlinear parameters from (a, g).
 
-    Returns (point, iterations, converged); point None when the start overflows.
+    Returns (point, iterations, converged); point None when the start overflows. With
+    ``lazy``, a first step within half a standard deviation is taken as the linearized
+    last step (the warm start of a sliding window, whose optimum moves little).
     """
     point = point or problem.evaluate(a, g)
     if point is None:
@@ -489,6 +550,8 @@ def _refine(problem: _Problem, a: float, g: float, max_iterations=_MAX_ITERATION
                     1e-2 * std_nl, 1e-13 * np.abs([point.a, point.g][:k_nl]) + 1e-300)):
                 # the next step would move (a, g) by < 1 % of their standard deviations
                 return point, iteration, True
+            if first and lazy and np.all(np.abs(step[:k_nl]) <= 0.5 * std_nl):
+                return _moved(point, step, k_nl), iteration, True
             first = False
             a_new = point.a + step[0]
             g_new = point.g + step[1] if problem.zeta is None else point.g
@@ -730,7 +793,8 @@ def _fixed_value(name, value, *, nonnegative=True):
     return finite_number(name, value, nonnegative=nonnegative)
 
 
-def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX_ITERATIONS):
+def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX_ITERATIONS,
+         work: _Workspace | None = None):
     """Identify from a record; ``warm`` = (a, g) starts Gauss-Newton there instead."""
     fixed = tuple(n for n, v in (('damping_ratio', zeta), ('eccentricity', r0))
                   if v is not None)
@@ -746,10 +810,11 @@ def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX
     if not np.any(rec.z):
         raise NotIdentifiable('no motion: the deflection is zero throughout, so it carries '
                               'no information on the natural frequency or the damping')
-    problem = _Problem(rec, zeta=zeta, r0=r0)
+    problem = _Problem(rec, zeta=zeta, r0=r0, work=work)
     point, iterations, converged = None, 0, False
     if warm is not None:
-        point, iterations, converged = _refine(problem, *warm, max_iterations=max_iterations)
+        point, iterations, converged = _refine(problem, *warm, max_iterations=max_iterations,
+                                               lazy=True)
     if point is None or not converged:
         start = _modulating_start(rec)
         if start is not None:
@@ -888,6 +953,7 @@ class RigIdentifier:
                              f'{warm_iterations!r}')
         self.warm_iterations = warm_iterations
         self._capacity = 2 * int(math.ceil(samples)) + 16
+        self._work = _Workspace()
         self.reset()
 
     def reset(self) -> None:
@@ -953,7 +1019,7 @@ class RigIdentifier:
             rec = _record(data[:, 0], data[:, 1], data[:, 2], data[:, 3],
                           data[:, 4] if self._with_rate else None)
             est = _fit(rec, self.zeta, self.r0, self.limits, warm=self._warm,
-                       max_iterations=self.warm_iterations)
+                       max_iterations=self.warm_iterations, work=self._work)
         except NotIdentifiable as exc:
             self.estimate, self.error, self.reason = None, exc, exc.reason
             return None
