@@ -67,6 +67,7 @@ _MAGNUS_C = math.sqrt(3.0) / 12.0
 _TERM_TOLERANCE = 1e-18     # Taylor terms of the step exponential summed to this size
 _SINGULAR = 1e-8            # singular value / largest (unit columns): structurally singular
 _MAX_ITERATIONS = 50
+_DETECTION = 100.0          # energy / noise variance (20 dB) of a motion taken as seen
 _NAMES = {'a': 'natural_frequency', 'g': 'damping_ratio', 'r0': 'eccentricity'}
 
 
@@ -443,6 +444,8 @@ class _Point:
     r0: float
     jacobian: np.ndarray        # (2N, p): free nonlinear columns, then the linear ones
     free: tuple                 # names of the columns of the jacobian
+    forced: np.ndarray          # the nonlinear columns without the free vibration (2N, k)
+    free_energy: float          # sum |z_h|^2 of the fitted free vibration z_h, m^2
 
 
 class _Problem:
@@ -483,15 +486,18 @@ class _Problem:
         r0 = float(coef[4]) if self.r0 is None else self.r0
         x0 = np.array([coef[0] + 1j * coef[1], coef[2] + 1j * coef[3], r0])
         residual = y - A @ coef
-        Ja = da @ x0
-        Jg = dg @ x0
-        if self.zeta is None:
-            nl = np.stack([Ja, Jg], axis=1)
-        else:       # g = 2 zeta sqrt(a)
-            nl = (Ja + Jg * (self.zeta / math.sqrt(a)))[:, None]
-        J = np.concatenate([_stack(nl), A], axis=1)
+        columns = []
+        for x in (x0, np.array([0.0, 0.0, r0])):    # and without the free vibration
+            Ja, Jg = da @ x, dg @ x
+            if self.zeta is None:
+                columns.append(_stack(np.stack([Ja, Jg], axis=1)))
+            else:       # g = 2 zeta sqrt(a)
+                columns.append(_stack((Ja + Jg * (self.zeta / math.sqrt(a)))[:, None]))
+        J = np.concatenate([columns[0], A], axis=1)
+        z_h = basis[:, :2] @ x0[:2]
         return _Point(a=a, g=g, rss=float(residual @ residual), residual=residual,
-                      linear=coef, r0=r0, jacobian=J, free=self.free)
+                      linear=coef, r0=r0, jacobian=J, free=self.free, forced=columns[1],
+                      free_energy=float(np.vdot(z_h, z_h).real))
 
     def dof(self) -> int:
         return 2 * self.rec.n - len(self.free)
@@ -664,9 +670,16 @@ def _covariances(point: _Point, problem: _Problem, drop=()):
     The ``drop`` parameters are taken as known (their rows and columns are zero).
     """
     keep = [i for i, name in enumerate(point.free) if name not in drop]
-    J = point.jacobian[:, keep]
-    Js, scale, _ = _scaled(J)
     sigma2 = point.rss / max(2 * problem.rec.n - len(keep), 1)
+    J = point.jacobian
+    k_nl = point.forced.shape[1]
+    if not point.free_energy > _DETECTION * 2 * sigma2:
+        # A free vibration fitted at the start but not resolved above the noise: its
+        # fitted amplitude is noise, and the information it would carry on (a, g) is
+        # not there. Take the information without it (as at the true parameters).
+        J = np.concatenate([point.forced, J[:, k_nl:]], axis=1)
+    J = J[:, keep]
+    Js, scale, _ = _scaled(J)
     _, sv, Vt = np.linalg.svd(Js, full_matrices=False)
     inv = np.where(sv > sv[0] * 1e-15, 1.0 / np.maximum(sv, 1e-300) ** 2, 0.0)
     cov = (Vt.T * inv) @ Vt
@@ -748,6 +761,18 @@ def _estimate(point, problem, iterations, drop=(), fixed=()):
 
 def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None):
     """The estimate, or NotIdentifiable naming what the record does not determine."""
+    sigma2 = point.rss / max(problem.dof(), 1)
+    model = problem.y - point.residual
+    n = problem.rec.n
+    zhat = model[:n] + 1j * model[n:]
+    variation = float(np.sum(np.abs(zhat - zhat.mean()) ** 2))
+    if not variation > _DETECTION * 2 * sigma2:
+        raise NotIdentifiable(
+            f'no motion above the noise: the fitted deflection varies by '
+            f'{math.sqrt(variation / n):.3g} m RMS, against noise of '
+            f'{math.sqrt(sigma2):.3g} m per sample (energy ratio '
+            f'{variation / (2 * sigma2) if sigma2 else 0.0:.3g}, needs > {_DETECTION:g})',
+            tuple(_NAMES[k] for k in ('a', 'r0', 'g')))
     bad = dict(unidentified or {})
     for name in _structural(point):
         bad.setdefault(name, 'the information matrix is singular: ' + _WHY[name])
