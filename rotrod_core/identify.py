@@ -706,18 +706,20 @@ def _physical(point: _Point, problem: _Problem, cov: np.ndarray):
 
 
 def _structural(point: _Point):
-    """Names of physical parameters in the null space of the (unit-column) Jacobian."""
+    """Sets of physical parameters in the null space of the (unit-column) Jacobian."""
     Js, _, norms = _scaled(point.jacobian)
     names = set()
     for i, name in enumerate(point.free):
         if norms[i] == 0 and name in _NAMES:
             names.add(_NAMES[name])
     _, sv, Vt = np.linalg.svd(Js, full_matrices=False)
+    groups = [frozenset([n]) for n in names]
     for k in np.nonzero(sv < _SINGULAR * sv[0])[0]:
-        for i, name in enumerate(point.free):
-            if name in _NAMES and abs(Vt[k, i]) > 0.2:
-                names.add(_NAMES[name])
-    return names
+        group = frozenset(_NAMES[name] for i, name in enumerate(point.free)
+                          if name in _NAMES and abs(Vt[k, i]) > 0.2)
+        if group:
+            groups.append(group)
+    return groups
 
 
 _WHY = {
@@ -774,8 +776,18 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
             f'{variation / (2 * sigma2) if sigma2 else 0.0:.3g}, needs > {_DETECTION:g})',
             tuple(_NAMES[k] for k in ('a', 'r0', 'g')))
     bad = dict(unidentified or {})
-    for name in _structural(point):
-        bad.setdefault(name, 'the information matrix is singular: ' + _WHY[name])
+    singular = set()
+    for group in _structural(point):
+        singular |= group
+        for name in group:
+            if len(group) == 1:
+                why = _WHY[name]
+            else:
+                others = ' and '.join(sorted(group - {name}))
+                why = (f'it enters the motion only in a combination with {others} (a '
+                       'deflection that does not change, for one, shows only the static '
+                       'r0 w^2 / (w0^2 - w^2))')
+            bad.setdefault(name, 'the information matrix is singular: ' + why)
     if not bad:
         est = _estimate(point, problem, iterations, fixed=fixed)
         checks = (
@@ -796,14 +808,14 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
         if not bad:
             return est
     inv = {v: k for k, v in _NAMES.items()}
-    drop = tuple(inv[name] for name in bad if inv[name] in point.free)
+    # the structurally singular ones are taken as known (else every variance is
+    # infinite); the others keep their (marginal) part in the rest's variances
+    drop = tuple(inv[name] for name in singular if inv[name] in point.free)
     partial = None
-    if len(drop) < len(problem.nonlinear) + ('r0' in point.free):
+    if len(bad) < len(problem.nonlinear) + ('r0' in point.free):
         partial = _estimate(point, problem, iterations, drop=drop, fixed=fixed)
-        for name in bad:
-            if inv[name] not in point.free:    # fixed internally (w = 0: r0 inert)
-                partial = dataclasses.replace(partial, **{name: math.nan,
-                                                          name + '_std': math.nan})
+        partial = dataclasses.replace(partial, **{
+            key: math.nan for name in bad for key in (name, name + '_std')})
     names = tuple(n for n in ('natural_frequency', 'eccentricity', 'damping_ratio')
                   if n in bad)
     reason = '; '.join(f'{n} is not identifiable from this record: {bad[n]}' for n in names)
