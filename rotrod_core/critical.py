@@ -46,22 +46,39 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
     ``params.eccentricity`` and ``deflection_limit`` may be arrays (Fig. 10). The
     quasi-static form uses the radial stiffness k1; the others need an isotropic rod.
     """
+    _limit(deflection_limit)
+    if start not in STARTS:
+        raise ValueError(f'start must be one of {STARTS}, got {start!r}')
+    w0 = (params.natural_frequency_radial if start == 'quasi_static'
+          else params.natural_frequency)
+    # the load radius re = (Me / M) r0 (r0 exactly for a massless rod)
+    load_radius = params.eccentricity * (params.eccentric_mass / params.modal_mass)
+    return critical_speed_from(w0, load_radius, deflection_limit, start)
+
+
+def critical_speed_from(natural_frequency, eccentricity, deflection_limit,
+                        start: str = 'quasi_static'):
+    """The closed forms of :func:`critical_speed` from plain numbers (rad/s).
+
+    ``natural_frequency`` w0 in rad/s, ``eccentricity`` r0 in m (>= 0; the load radius
+    (Me / M) r0 for a rod with mass, which is what identification measures), the deflection
+    limit in m; arrays broadcast. Used with identified values
+    (:meth:`rotrod_core.RigEstimate.critical_speed`). NaN inputs give NaN.
+    """
     d = _limit(deflection_limit)
     if start not in STARTS:
         raise ValueError(f'start must be one of {STARTS}, got {start!r}')
-    # the load radius re = (Me / M) r0 (r0 exactly for a massless rod)
-    r0 = np.asarray(params.eccentricity * (params.eccentric_mass / params.modal_mass),
-                    dtype=float)
-    # d / (d + re) as 1 / (1 + re/d): d + re may overflow, re/d = inf gives the limit 0
+    w0 = np.asarray(natural_frequency, dtype=float)
+    r0 = np.asarray(eccentricity, dtype=float)
+    # d / (d + r0) as 1 / (1 + r0/d): d + r0 may overflow, r0/d = inf gives the limit 0
     with np.errstate(over='ignore'):
         ratio = r0 / d
         if start == 'quasi_static':
-            w0 = params.natural_frequency_radial
             w = w0 * np.sqrt(1.0 / (1.0 + ratio))
+        elif start == 'step':
+            w = w0 * np.sqrt(1.0 / (1.0 + 2 * ratio))
         else:
-            w0 = params.natural_frequency
-            w = (w0 * np.sqrt(1.0 / (1.0 + 2 * ratio)) if start == 'step'
-                 else w0 / (1.0 + ratio))
+            w = w0 / (1.0 + ratio)
     w = np.asarray(w, dtype=float)
     return float(w) if w.ndim == 0 else w
 
