@@ -13,6 +13,8 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+
 from rotrod_core.engine import DRIVES, EngineConfig
 from rotrod_core.model import COUPLINGS, STATE_FIELDS
 from rotrod_core.params import SECTIONS, RodParams
@@ -136,6 +138,11 @@ NODE_SPECS = (
          read_only=True),
     Spec('diagnostics_rate', 1.0, 'rate of /diagnostics (also sent on a change of level), '
          'Hz of wall time', 0.01, 100.0),
+    Spec('deflection_noise', 0.0,
+         'standard deviation of Gaussian noise added to the published tip/deflection '
+         '(u and v each; a sensor), m; never to the state; 0 = none', 0.0, 1.0),
+    Spec('noise_seed', 0, 'seed of the deflection noise: the same seed, the same noise '
+         '(a reproducible run)', 0, 2**31 - 1, integer=True),
     Spec('estimate_window', 1.0,
          'window of the whirl-frequency estimate from the published tip motion '
          '(frequencies/estimate), s of simulated time; 0 = no estimate', 0.0, 60.0),
@@ -177,6 +184,8 @@ class NodeSettings:
     disk_radius: float = 0.15
     frame_prefix: str = ''
     diagnostics_rate: float = 1.0
+    deflection_noise: float = 0.0
+    noise_seed: int = 0
     estimate_window: float = 1.0
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
@@ -192,6 +201,21 @@ class NodeSettings:
     def publishes_clock(self) -> bool:
         """Whether /clock is published (real_time_factor != 1)."""
         return self.real_time_factor != 1.0
+
+
+def descriptor(spec: Spec) -> ParameterDescriptor:
+    """The ROS parameter descriptor of ``spec``: description, range or choices."""
+    d = ParameterDescriptor(name=spec.name, description=spec.description,
+                            read_only=spec.read_only)
+    if spec.choices:
+        d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
+    elif spec.low is not None and spec.integer:
+        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                        step=0)]
+    elif spec.low is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                     to_value=float(spec.high), step=0.0)]
+    return d
 
 
 def check_value(spec: Spec, value: Any) -> None:
@@ -213,6 +237,15 @@ def check_value(spec: Spec, value: Any) -> None:
         raise ValueError(f'{spec.name} must be in [{spec.low:g}, {spec.high:g}], got {value!r}')
 
 
+def rod_params(values: dict) -> RodParams:
+    """The RodParams of the ROD_SPECS values (section sizes 0 = unused); ValueError."""
+    rod = {s.name: values[s.name] for s in ROD_SPECS}
+    for name in ('section_width', 'section_thickness'):
+        if rod[name] == 0.0:
+            rod[name] = None
+    return RodParams(**rod)
+
+
 def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     """Validate a complete set of parameter values; return the engine config and node settings.
 
@@ -221,11 +254,7 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     for name, value in values.items():
         if name in SPECS_BY_NAME:
             check_value(SPECS_BY_NAME[name], value)
-    rod = {s.name: values[s.name] for s in ROD_SPECS}
-    for name in ('section_width', 'section_thickness'):
-        if rod[name] == 0.0:
-            rod[name] = None
-    params = RodParams(**rod)
+    params = rod_params(values)
     initial = {name: values[f'initial.{name}'] for name in STATE_FIELDS
                if values[f'initial.{name}'] != 0.0}
     engine = EngineConfig(params=params, initial=initial,
