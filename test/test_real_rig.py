@@ -452,3 +452,34 @@ def test_energy_function_is_the_lagrangian_energy_for_any_state():
     k = k_tension(M_TIP * G) + INT_WEIGHT * STEEL * A_SEC * G
     np.testing.assert_allclose(energy(co, s), T + 0.5 * k * (s[0]**2 + s[1]**2), rtol=1e-12)
     np.testing.assert_allclose(angular_momentum(co, s), L, rtol=1e-12)
+
+
+def test_the_reproduction_report_puts_the_real_rig_beside_the_paper():
+    from rotrod_core import report
+    from rotrod_core.rig_comparison import real_rig, summarize
+    paper_rig = RodParams()
+    rig = real_rig(paper_rig)
+    assert (rig.gravity, rig.rod_density) == (G, STEEL)
+    rows = [summarize(t, p, Eq26Profile(), 40.0, 1e-3, 3e-3)
+            for t, p in (('paper', paper_rig), ('rig', rig))]
+    # written out here: the exact tip-load stiffness, the rod's weight as a Rayleigh
+    # geometric stiffness, one-mode Rayleigh-Ritz masses (docs/real_rig.md)
+    area = math.pi * 0.003**2 / 4
+    ei = 100e9 * math.pi * 0.003**4 / 64
+    kappa = math.sqrt(0.3 * G / ei)
+    k = 0.3 * G / (math.tan(kappa * 0.3) / kappa - 0.3) - 3 / 8 * STEEL * area * G
+    modal = 0.3 + 33 / 140 * STEEL * area * 0.3
+    load_radius = 0.1 * (0.3 + 3 / 8 * STEEL * area * 0.3) / modal
+    w0 = math.sqrt(k / modal)
+    assert rows[1].stiffness == pytest.approx(k, rel=1e-9)
+    assert rows[1].natural_frequency == pytest.approx(w0, rel=1e-9)
+    assert rows[1].critical_speed == pytest.approx(w0 * math.sqrt(3e-3 / (3e-3 + load_radius)),
+                                                   rel=1e-9)
+    assert rows[1].buckling_fraction == pytest.approx(0.3 * G / (math.pi**2 * ei / 0.36),
+                                                      rel=1e-9)
+    assert rows[0].critical_speed == pytest.approx(2.0710357, rel=1e-7)
+    # the Eq. 26 hold at 2 rad/s sits at the static deflection (plus a sub-um whirl)
+    us = (0.3 + 3 / 8 * STEEL * area * 0.3) * 4 * 0.1 / (k - modal * 4)
+    assert rows[1].peak_deflection == pytest.approx(us, rel=1e-3)
+    text = report.real_rig_table(rows, 3e-3)
+    assert f'| {w0:.4f} |' in text and f'| {k:.4f} |' in text

@@ -137,8 +137,10 @@ def test_paper_figures_are_drawn_images_of_640x480(reproduced, name):
 def test_reproduce_shows_numbered_progress(reproduced):
     stderr = reproduced[2]
     steps = re.findall(r'^\[reproduce (\d+)/(\d+)\] ', stderr, re.M)
-    assert [int(a) for a, _ in steps] == list(range(1, 9)) and {b for _, b in steps} == {'8'}
-    assert stderr.count('done in') == 8 and 'Eq. 26 shape:' in stderr
+    # one more step than before: the real rig beside the idealisation (issue 18)
+    assert [int(a) for a, _ in steps] == list(range(1, 10)) and {b for _, b in steps} == {'9'}
+    assert stderr.count('done in') == 9 and 'Eq. 26 shape:' in stderr
+    assert 'a real rig beside the idealisation' in stderr
 
 
 def test_report_embeds_every_figure(reproduced):
