@@ -20,10 +20,20 @@ def namespace(request) -> str:
     return '/t' + hashlib.sha1(request.node.nodeid.encode()).hexdigest()[:10]
 
 
-def start_simulator(ros_processes, ns, **params):
-    """The simulator in namespace ``ns`` with ``params``, once it says it is ready."""
+CONFIG = Path(__file__).resolve().parent.parent / 'config'
+"""The package's parameter files."""
+
+
+def start_simulator(ros_processes, ns, *params_files, **params):
+    """The simulator in namespace ``ns``, once it says it is ready.
+
+    ``params_files`` are names of files in config/ (``'table1.yaml'``), applied in
+    order; ``params`` override them.
+    """
+    ros_args = ros_arguments(namespace=ns, params=params)
+    files = [arg for name in params_files for arg in ('--params-file', str(CONFIG / name))]
     proc = ros_processes.start_console_script(
-        'simulator', *ros_arguments(namespace=ns, params=params), name=ns.strip('/'))
+        'simulator', ros_args[0], *files, *ros_args[1:], name=ns.strip('/'))
     proc.wait_for_output('ready', timeout=30)
     return proc
 

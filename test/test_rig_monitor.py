@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from node_probes import namespace, omega_publisher, stamp
+from node_probes import namespace, omega_publisher, stamp, start_simulator
 from reference import R0, K, M
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
@@ -88,16 +88,9 @@ def test_bad_monitor_configurations_are_refused(changes, match):
 @pytest.mark.ros
 def test_live_the_monitor_finds_the_real_rig_within_10_s_of_a_spin_up(
         ros_processes, ros_node, request):
-    from pathlib import Path
-    config = Path(__file__).resolve().parent.parent / 'config'
     ns = namespace(request)
-    sim = ros_processes.start_console_script(
-        'simulator', '--ros-args', '-r', f'__ns:={ns}',
-        '--params-file', str(config / 'table1.yaml'),
-        '--params-file', str(config / 'real_rig.yaml'),
-        '-p', 'real_time_factor:=2.0', '-p', 'deflection_noise:=1e-5', '-p', 'noise_seed:=7',
-        name='simulator')
-    sim.wait_for_output('ready', timeout=30)
+    start_simulator(ros_processes, ns, 'table1.yaml', 'real_rig.yaml', real_time_factor=2.0,
+                    deflection_noise=1e-5, noise_seed=7)
     monitor = ros_processes.start_console_script(
         'rig_monitor', *ros_arguments(namespace=ns), name='rig_monitor')   # Table 1
     monitor.wait_for_output('ready: identifying', timeout=30)

@@ -342,11 +342,7 @@ def test_while_paced_the_node_keeps_idle_cpus_awake_and_lets_go_after(
     before = scheduling.cpu_latency_limit()
     ns = namespace(request)
     # machine-wide, so opt-in: config/realtime.yaml asks for it
-    realtime = Path(__file__).resolve().parent.parent / 'config' / 'realtime.yaml'
-    sim = ros_processes.start_console_script(
-        'simulator', '--ros-args', '-r', f'__ns:={ns}', '--params-file', str(realtime),
-        name=ns.strip('/'))
-    sim.wait_for_output('ready', timeout=30)
+    sim = start_simulator(ros_processes, ns, 'realtime.yaml')
     sim.wait_for_output('cpu_dma_latency: idle CPUs wake within 0 us', timeout=10)
     assert cpu_latency_requests(sim.pid) == 1 and scheduling.cpu_latency_limit() == 0
     # as fast as possible there is nothing to be on time for: released

@@ -341,15 +341,8 @@ def test_a_halt_on_the_validity_bound_then_reset_and_normal_operation(
 def test_the_real_rig_params_file_settles_at_its_softened_static_deflection(
         ros_processes, ros_node, request):
     """config/real_rig.yaml: Table 1 upright under gravity with a steel rod (issue 18)."""
-    from pathlib import Path
-    config = Path(__file__).resolve().parent.parent / 'config'
     ns = namespace(request)
-    sim = ros_processes.start_console_script(
-        'simulator', '--ros-args', '-r', f'__ns:={ns}',
-        '--params-file', str(config / 'table1.yaml'),
-        '--params-file', str(config / 'real_rig.yaml'), '-p', f'real_time_factor:={FAST}',
-        name=ns.strip('/'))
-    sim.wait_for_output('ready', timeout=30)
+    start_simulator(ros_processes, ns, 'table1.yaml', 'real_rig.yaml', real_time_factor=FAST)
     obs = Observer(ros_node, ns)
     omega_publisher(ros_node, ns).publish(Float64(data=1.5))
     t_reached = obs.wait_for_omega(1.5)
