@@ -19,12 +19,14 @@ from .batch import BatchResult, simulate_batch
 from .critical import critical_speed, critical_speed_for_profile
 from .model import State
 from .params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
+from .planner import plan_spin_up, whirl_residual
 from .profiles import (
     ConstantProfile,
     Eq26Profile,
     Profile,
     RampProfile,
     SineSweepProfile,
+    SpinUpProfile,
     StepProfile,
     TableProfile,
     make_profile,
@@ -49,5 +51,6 @@ __all__ = [
     'TableProfile', 'Whirl', 'WhirlEstimate', 'WhirlEstimator', 'WhirlSettings', 'campbell',
     'critical_speed', 'critical_speed_for_profile', 'disk_inertia', 'dynamic_frequencies',
     'estimate_whirl', 'estimate_whirl_frequencies', 'make_profile', 'modal_analysis',
-    'simulate', 'simulate_batch', 'static_deflection',
+    'plan_spin_up', 'simulate', 'simulate_batch', 'SpinUpProfile', 'static_deflection',
+    'whirl_residual',
 ]

@@ -62,7 +62,8 @@ def _params(args) -> RodParams:
 
 def _add_profile(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group('angular-velocity profile (velocity drive)')
-    g.add_argument('--profile', choices=tuple(PROFILES), default='eq26')
+    g.add_argument('--profile', choices=tuple(k for k in PROFILES if k != 'spin_up'),
+                   default='eq26')
     g.add_argument('--omega', type=_finite, default=2.0,
                    help='peak/constant/final angular velocity [rad/s] (default 2)')
     g.add_argument('--period', type=_finite, default=15.0, help='Eq. 26 period T [s]')

@@ -1,0 +1,528 @@
+"""The fastest vibration-free change of hub speed under a tip-deflection limit.
+
+:func:`plan_spin_up` returns a :class:`~rotrod_core.profiles.SpinUpProfile` that takes
+the hub from ``omega_start`` to ``omega_target`` in the shortest duration it finds such
+that the tip deflection |r| stays under a limit, the free whirl left after arrival
+(about the static deflection at the target speed) is below ``residual``, optionally
+for every natural frequency in a band (1 +- eps) w0, and |w'| stays under a bound.
+
+Method (docs/planner.md): for a given w(t) the deflection equations are linear, so
+the end state of the run fixes the free vibration that follows in closed form: its
+offset from the static deflection, split on the eigenvectors of the constant-speed
+state matrix, gives the two whirls and their amplitudes. w(t) is a clamped cubic
+B-spline (w' = 0 at both ends); for a fixed duration, SLSQP chooses its free control
+points to minimise the largest residual subject to the deflection and acceleration
+limits, with exact gradients from a forward sensitivity of the fourth-order Magnus
+propagator. The duration is found by bracketing and bisection on feasibility, and
+the result is checked afterwards on finer grids (time steps and the robust band).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import BSpline
+from scipy.optimize import minimize
+
+from .checks import finite_number
+from .expm import expm_batch
+from .model import Coefficients
+from .params import RodParams
+from .profiles import SpinUpProfile, spin_up_knots
+
+_GAUSS = math.sqrt(3.0) / 6.0
+_C3 = math.sqrt(3.0) / 12.0
+STEPS_PER_KNOT = 8
+"""Magnus steps per knot interval while optimising (4x more for the final check)."""
+BAND_SAMPLES = 5
+"""Natural-frequency samples across a robust band used by the optimiser."""
+BAND_CHECK = 41
+"""Natural-frequency samples across the band in the final check."""
+WINDOWS = 40
+"""Deflection-limit constraints: the largest |r| in each of this many time windows."""
+SHAPE_BOUND = 0.3
+"""Control points stay within the start..target range widened by this fraction."""
+RESIDUAL_MARGIN = 0.1
+"""The optimiser aims at (1 - margin) x residual; the final check uses residual."""
+LIMIT_MARGIN = 1e-4
+"""The optimiser keeps |r| <= (1 - margin) x deflection_limit on its time grid."""
+DURATION_TOLERANCE = 0.02
+"""Relative width of the final duration bracket."""
+STALL = 25
+"""An optimisation stops as infeasible when the best of its last STALL iterations
+is still above 1.5x the aim and less than 20 % below the best before them."""
+
+
+@dataclass(frozen=True)
+class _Sample:
+    """One system of the band: coefficients, start state, target state, residual rows."""
+
+    co: dict
+    start: np.ndarray       # (u, v, u', v', 1) at omega_start, at rest about its static
+    target: np.ndarray      # (u, v, u', v') static at omega_target
+    rows: np.ndarray        # complex (n, 4): residual = sum |rows @ (x - target)|
+
+
+def _coefficients(params: RodParams, scale: float) -> dict:
+    """Per-unit-mass coefficients, natural frequencies scaled by ``scale``.
+
+    The stiffness scales by scale^2, as a change of Young's modulus would.
+    """
+    co = Coefficients.from_params(params.replace(youngs_modulus=params.youngs_modulus
+                                                 * scale * scale))
+    return {'w1sq': co.w1sq, 'w2sq': co.w2sq, 'g1': co.g1, 'g2': co.g2,
+            'r0': co.eccentricity}
+
+
+def _matrix(co: dict, w, wd) -> np.ndarray:
+    """Augmented 5x5 matrices of (u, v, u', v', 1)' at speeds ``w``, accelerations ``wd``.
+
+    The equations of rotrod_core.model, written out here for their derivatives.
+    """
+    w = np.asarray(w, dtype=float)
+    A = np.zeros(np.broadcast_shapes(w.shape, np.shape(co['w1sq'])) + (5, 5))
+    w2 = w * w
+    A[..., 0, 2] = A[..., 1, 3] = 1.0
+    A[..., 2, 0] = w2 - co['w1sq']
+    A[..., 2, 1] = wd
+    A[..., 2, 2] = -co['g1']
+    A[..., 2, 3] = 2 * w
+    A[..., 2, 4] = w2 * co['r0']
+    A[..., 3, 0] = -wd
+    A[..., 3, 1] = w2 - co['w2sq']
+    A[..., 3, 2] = -2 * w
+    A[..., 3, 3] = -co['g2']
+    A[..., 3, 4] = -wd * co['r0']
+    return A
+
+
+def _d_speed(co: dict, w) -> np.ndarray:
+    """d(matrix)/dw."""
+    w = np.asarray(w, dtype=float)
+    D = np.zeros(np.broadcast_shapes(w.shape, np.shape(co['w1sq'])) + (5, 5))
+    D[..., 2, 0] = D[..., 3, 1] = 2 * w
+    D[..., 2, 3] = 2.0
+    D[..., 2, 4] = 2 * w * co['r0']
+    D[..., 3, 2] = -2.0
+    return D
+
+
+def _d_acceleration(co: dict, shape) -> np.ndarray:
+    """d(matrix)/dw'."""
+    D = np.zeros(np.broadcast_shapes(shape, np.shape(co['w1sq'])) + (5, 5))
+    D[..., 2, 1] = 1.0
+    D[..., 3, 0] = -1.0
+    D[..., 3, 4] = -co['r0']
+    return D
+
+
+def _sample(params: RodParams, scale: float, omega_start: float,
+            omega_target: float) -> _Sample:
+    co = _coefficients(params, scale)
+    states = []
+    for w in (omega_start, omega_target):
+        A = _matrix(co, w, 0.0)
+        lam = np.linalg.eigvals(A[:4, :4])
+        if np.max(lam.real) > 1e-9 * np.max(np.abs(lam)):
+            raise ValueError(f'the rod is unstable at a constant {w:g} rad/s (natural '
+                             f'frequencies x {scale:g}): no residual-free arrival or start '
+                             'exists there')
+        states.append(np.linalg.solve(A[:4, :4], -A[:4, 4]))
+    return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target))
+
+
+def _residual_rows(co: dict, omega: float) -> np.ndarray:
+    """Rows R (complex, n x 4) with: free-whirl amplitude = sum |R @ (x - x_static)|.
+
+    At constant w a free motion is x(t) = sum_i q_i phi_i exp(lambda_i t), q = V^-1 x.
+    A complex pair (lambda, conj lambda) moves the tip as z = u + i v = a+ exp(lambda t)
+    + a- exp(conj(lambda) t) with a+- = q (phi_u +- i phi_v) in the form
+    a+ = q (phi_u + i phi_v), conj(a-) = q (phi_u - i phi_v): an ellipse whose
+    semi-major axis (the whirl's amplitude) is |a+| + |a-|. A real eigenvalue moves it
+    along a line, amplitude |q| |(phi_u, phi_v)|.
+    """
+    lam, V = np.linalg.eig(_matrix(co, omega, 0.0)[:4, :4])
+    W = np.linalg.inv(V)
+    scale = np.max(np.abs(lam))
+    rows = []
+    for i in range(4):
+        if lam[i].imag > 1e-12 * scale:
+            a, b = V[0, i] * W[i], V[1, i] * W[i]
+            rows += [a + 1j * b, a - 1j * b]
+        elif abs(lam[i].imag) <= 1e-12 * scale:
+            rows.append(math.hypot(abs(V[0, i]), abs(V[1, i])) * W[i])
+    return np.array(rows, dtype=complex)
+
+
+def whirl_residual(params: RodParams, omega: float, u, v, du, dv) -> float:
+    """Free-whirl amplitude (m) of a state about the static deflection at ``omega``.
+
+    The state is (u, v, u', v'); the amplitude is the sum of the semi-major axes of the whirls the
+    rod performs if w stays at ``omega`` from now on (at this instant, for a damped rod).
+    """
+    s = _sample(params, 1.0, omega, omega)
+    e = np.array([u, v, du, dv], dtype=float) - s.target
+    return float(np.sum(np.abs(s.rows @ e)))
+
+
+def _basis(n_free: int, x: np.ndarray):
+    spline = BSpline(spin_up_knots(n_free), np.eye(n_free + 4), 3)
+    return spline(x), spline.derivative()(x)
+
+
+class _Grid:
+    """Magnus steps aligned with the knots (the spline is a polynomial within each)."""
+
+    def __init__(self, n_free: int, steps_per_knot: int):
+        self.n = (n_free + 1) * steps_per_knot
+        x0 = np.arange(self.n) / self.n
+        self.x1, self.x2 = x0 + (0.5 - _GAUSS) / self.n, x0 + (0.5 + _GAUSS) / self.n
+        self.w1, self.d1 = _basis(n_free, self.x1)
+        self.w2, self.d2 = _basis(n_free, self.x2)
+
+
+def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
+    """States on the grid nodes for every sample, shape (B, N + 1, 5).
+
+    With ``free``, also their derivatives with respect to those control points and
+    to T, shape (B, N + 1, 5, len(free) + 1).
+    """
+    co = {k: np.array([s.co[k] for s in samples])[:, None] for k in samples[0].co}
+    h = T / grid.n
+    w1, wd1 = grid.w1 @ c, grid.d1 @ c / T
+    w2, wd2 = grid.w2 @ c, grid.d2 @ c / T
+    A1, A2 = _matrix(co, w1, wd1), _matrix(co, w2, wd2)
+    k = _C3 * h * h
+    comm = A2 @ A1 - A1 @ A2
+    omega = 0.5 * h * (A1 + A2) + k * comm
+    half = expm_batch(0.5 * omega)
+    phi = half @ half
+    B = len(samples)
+    X = np.empty((B, grid.n + 1, 5))
+    X[:, 0] = [s.start for s in samples]
+    for j in range(grid.n):
+        X[:, j + 1] = np.einsum('bij,bj->bi', phi[:, j], X[:, j])
+    if free is None:
+        return X, None
+    # d(Omega)/dp for p = w(t1), w'(t1), w(t2), w'(t2), and T at fixed speeds
+    dw1, dw2 = _d_speed(co, w1), _d_speed(co, w2)
+    da1, da2 = _d_acceleration(co, w1.shape), _d_acceleration(co, w2.shape)
+    E = np.stack([0.5 * h * dw1 + k * (A2 @ dw1 - dw1 @ A2),
+                  0.5 * h * da1 + k * (A2 @ da1 - da1 @ A2),
+                  0.5 * h * dw2 + k * (dw2 @ A1 - A1 @ dw2),
+                  0.5 * h * da2 + k * (da2 @ A1 - A1 @ da2),
+                  (0.5 * h * (A1 + A2) + 2 * k * comm) / T])
+    # Frechet derivative of exp along E applied to x_j, by Simpson's rule on
+    # integral_0^1 exp(s Omega) E exp((1 - s) Omega) ds (error ~ |Omega|^4 / 2880)
+    xj, xn = X[:, :-1], X[:, 1:]
+    mid = np.einsum('bnij,bnj->bni', half, xj)
+    dx = (np.einsum('bnij,pbnj->pbni', phi, np.einsum('pbnij,bnj->pbni', E, xj))
+          + 4 * np.einsum('bnij,pbnj->pbni', half, np.einsum('pbnij,bnj->pbni', E, mid))
+          + np.einsum('pbnij,bnj->pbni', E, xn)) / 6
+    z = np.zeros((grid.n, 1))
+    dp = np.stack([np.c_[grid.w1[:, free], z], np.c_[grid.d1[:, free] / T, -wd1[:, None] / T],
+                   np.c_[grid.w2[:, free], z], np.c_[grid.d2[:, free] / T, -wd2[:, None] / T],
+                   np.c_[np.zeros((grid.n, len(free))), z + 1]])
+    D = np.einsum('pbni,pnk->bnik', dx, dp)
+    S = np.empty((B, grid.n + 1, 5, D.shape[-1]))
+    S[:, 0] = 0.0
+    for j in range(grid.n):
+        S[:, j + 1] = phi[:, j] @ S[:, j] + D[:, j]
+    return X, S
+
+
+def _residuals(samples, X, S=None):
+    """Residual amplitude of each sample at the end (and its gradient)."""
+    out, grad = [], []
+    for b, s in enumerate(samples):
+        val = s.rows @ (X[b, -1, :4] - s.target)
+        mag = np.abs(val)
+        out.append(mag.sum())
+        if S is not None:
+            dval = s.rows @ S[b, -1, :4]
+            grad.append(((np.conj(val)[:, None] * dval).real
+                         / np.maximum(mag, 1e-300)[:, None]).sum(axis=0))
+    return np.array(out), (np.array(grad) if S is not None else None)
+
+
+class _Problem:
+    """The shape optimisation at one duration, and the feasibility checks."""
+
+    def __init__(self, params, omega_start, omega_target, limit, residual, scales,
+                 max_acc, n_free):
+        self.params = params
+        self.ws, self.wf = omega_start, omega_target
+        self.dw = omega_target - omega_start
+        self.limit, self.residual, self.max_acc = limit, residual, max_acc
+        self.n_free = n_free
+        self.free = np.arange(2, n_free + 2)
+        self.scales = list(scales)
+        self.samples = [_sample(params, s, omega_start, omega_target) for s in self.scales]
+        self.grid = _Grid(n_free, STEPS_PER_KNOT)
+        self.windows = np.array_split(np.arange(self.grid.n + 1), WINDOWS)
+        lo, hi = sorted((omega_start, omega_target))
+        cap = _speed_cap(params, max(self.scales[0], min(self.scales)))
+        lo, hi = max(lo - SHAPE_BOUND * (hi - lo), 0.0), min(hi + SHAPE_BOUND * (hi - lo),
+                                                              cap)
+        bounds = sorted(((lo - self.ws) / self.dw, (hi - self.ws) / self.dw))
+        self.bounds = [tuple(bounds)] * n_free
+        t = spin_up_knots(n_free)
+        n = n_free + 4
+        # w' of a cubic B-spline is a quadratic one with control points
+        # 3 (c_i+1 - c_i) / (t_i+4 - t_i+1): bounding them bounds |w'| (convex hull)
+        self.diff = np.zeros((n - 1, n))
+        for i in range(n - 1):
+            f = 3.0 / (t[i + 4] - t[i + 1])
+            self.diff[i, i], self.diff[i, i + 1] = -f, f
+
+    def control_points(self, y) -> np.ndarray:
+        return np.r_[self.ws, self.ws, self.ws + self.dw * np.asarray(y), self.wf, self.wf]
+
+    def initial_shape(self) -> np.ndarray:
+        """Free control points of the shape x - sin(2 pi x) / 2 pi (Eq. 26's spin-up)."""
+        x = np.linspace(0.0, 1.0, 200)
+        Bw, _ = _basis(self.n_free, x)
+        target = x - np.sin(2 * np.pi * x) / (2 * np.pi) - Bw[:, -2:].sum(axis=1)
+        return np.linalg.lstsq(Bw[:, self.free], target, rcond=None)[0]
+
+    def evaluate(self, T, y):
+        X, S = _propagate(self.samples, self.grid, T, self.control_points(y), self.free)
+        S = S[..., :-1] * self.dw
+        res, dres = _residuals(self.samples, X, S)
+        r2 = X[0, :, 0] ** 2 + X[0, :, 1] ** 2
+        dr2 = 2 * (X[0, :, 0, None] * S[0, :, 0] + X[0, :, 1, None] * S[0, :, 1])
+        return res, dres, r2, dr2
+
+    def solve(self, T, y0, maxiter=60):
+        """Minimise the largest residual at duration T; (y, feasible, largest residual)."""
+        cache = {}
+
+        def ev(z):
+            key = z[:-1].tobytes()      # the evaluation does not depend on the slack
+            if key not in cache:
+                if len(cache) > 4:
+                    cache.pop(next(iter(cache)))
+                cache[key] = self.evaluate(T, z[:-1])
+            return cache[key]
+
+        aim = self.residual * (1 - RESIDUAL_MARGIN)
+        d2 = (self.limit * (1 - LIMIT_MARGIN)) ** 2
+
+        def cons(z):
+            res, _, r2, _ = ev(z)
+            peaks = np.array([r2[w].max() for w in self.windows])
+            return np.r_[z[-1] - res / aim, 1.0 - peaks / d2]
+
+        def jac(z):
+            res, dres, r2, dr2 = ev(z)
+            at = [w[np.argmax(r2[w])] for w in self.windows]
+            return np.r_[np.c_[-dres / aim, np.ones(len(res))],
+                         np.c_[-dr2[at] / d2, np.zeros(len(at))]]
+
+        constraints = [{'type': 'ineq', 'fun': cons, 'jac': jac}]
+        if self.max_acc is not None:
+            A = self.diff[:, self.free] * self.dw / T
+            a0 = self.diff @ self.control_points(np.zeros(self.n_free)) / T
+            Az = np.c_[np.r_[A, -A], np.zeros(2 * len(A))]
+            b = self.max_acc - np.r_[a0, -a0]
+            constraints.append({'type': 'ineq', 'fun': lambda z: b - Az @ z,
+                                'jac': lambda z: -Az})
+        def feasible(y):
+            res, _, r2, _ = ev(np.r_[y, 0.0])
+            ok = res.max() <= aim and r2.max() <= d2
+            if ok and self.max_acc is not None:
+                ok = bool(np.all(constraints[1]['fun'](np.r_[y, 0.0]) >= -1e-12))
+            return bool(ok)
+
+        found = []
+
+        history = []
+
+        def stop_when_feasible(intermediate_result):
+            y = intermediate_result.x[:-1]
+            if feasible(y):
+                found.append(y)
+                raise StopIteration
+            # give up when the largest residual has stalled well above the aim
+            history.append(ev(np.r_[y, 0.0])[0].max() / aim)
+            if len(history) > 2 * STALL and min(history[-STALL:]) > max(
+                    1.5, 0.8 * min(history[:-STALL])):
+                raise StopIteration
+
+        y0 = np.clip(y0, *self.bounds[0])
+        if feasible(y0):
+            return y0, True
+        z0 = np.r_[y0, ev(np.r_[y0, 0.0])[0].max() / aim * 1.01]
+        sol = minimize(lambda z: z[-1], z0, jac=lambda z: np.r_[np.zeros(self.n_free), 1.0],
+                       method='SLSQP', constraints=constraints,
+                       bounds=self.bounds + [(0.0, None)], callback=stop_when_feasible,
+                       options={'maxiter': maxiter, 'ftol': 1e-10})
+        if found:
+            return found[0], True
+        y = sol.x[:-1]
+        if np.all(np.isfinite(y)):
+            return y, feasible(y)
+        return y0, False
+
+    def check(self, T, y):
+        """Check on a 4x finer time grid: (peak, nominal residual, band max, its scale).
+
+        The band (robust only) is checked on BAND_CHECK natural frequencies.
+        """
+        fine = _Grid(self.n_free, 4 * STEPS_PER_KNOT)
+        c = self.control_points(y)
+        X, _ = _propagate(self.samples[:1], fine, T, c)
+        peak = float(np.sqrt(np.max(X[0, :, 0] ** 2 + X[0, :, 1] ** 2)))
+        nominal = float(_residuals(self.samples[:1], X)[0][0])
+        band, worst = nominal, 1.0
+        eps = max(abs(s - 1.0) for s in self.scales)
+        if eps > 0:
+            scales = np.linspace(1 - eps, 1 + eps, BAND_CHECK)
+            samples = [_sample(self.params, s, self.ws, self.wf) for s in scales]
+            Xb, _ = _propagate(samples, fine, T, c)
+            res = _residuals(samples, Xb)[0]
+            band, worst = float(res.max()), float(scales[np.argmax(res)])
+        return peak, nominal, band, worst
+
+
+def _speed_cap(params: RodParams, scale: float) -> float:
+    """Speeds kept below this in a plan: 0.98 x the lowest natural frequency (scaled)."""
+    return 0.98 * scale * min(float(params.natural_frequency_radial),
+                              float(params.natural_frequency_tangential))
+
+
+def _check_inputs(params, omega_target, omega_start, limit, residual, robust, max_acc):
+    if not isinstance(params, RodParams):
+        raise ValueError(f'params must be RodParams, got {type(params).__name__}')
+    if params.is_batch:
+        raise ValueError('plan_spin_up plans for one system, not a batch of parameters')
+    wf = finite_number('omega_target', omega_target, nonnegative=True)
+    ws = finite_number('omega_start', omega_start, nonnegative=True)
+    limit = finite_number('deflection_limit', limit, positive=True)
+    residual = finite_number('residual', residual, positive=True)
+    robust = finite_number('robust', robust, nonnegative=True)
+    if robust >= 1:
+        raise ValueError(f'robust must be < 1 (a band (1 +- robust) w0), got {robust!r}')
+    if max_acc is not None:
+        max_acc = finite_number('max_angular_acceleration', max_acc, positive=True)
+    if wf == ws:
+        raise ValueError(f'omega_target equals omega_start ({ws!r} rad/s): nothing to plan')
+    return wf, ws, limit, residual, robust, max_acc
+
+
+def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float = 0.0,
+                 deflection_limit: float = 0.003, residual: float = 2.5e-7,
+                 robust: float = 0.0, max_angular_acceleration: float | None = None,
+                 ) -> SpinUpProfile:
+    """The shortest smooth change of speed that leaves no vibration, found numerically.
+
+    The hub goes from ``omega_start`` (the rod at rest about its static deflection
+    there) to ``omega_target`` (rad/s, both >= 0; below the start: a spin-down) along
+    a :class:`SpinUpProfile` with w and w' continuous and w' = 0 at both ends, such that
+
+    - |r(t)| <= ``deflection_limit`` (m) throughout, nominal parameters;
+    - after the change, the free whirl about the static deflection at ``omega_target``
+      (sum of the two whirls' amplitudes) is <= ``residual`` (m), for every natural
+      frequency in [(1 - robust) w0, (1 + robust) w0] when ``robust`` > 0 (stiffness
+      scaled, as by Young's modulus);
+    - |w'| <= ``max_angular_acceleration`` (rad/s^2) when given.
+
+    The profile carries the planner's predictions ``peak_deflection``,
+    ``residual_amplitude`` (nominal) and ``band_residual`` (largest over the band).
+    Raises ValueError naming the input or the constraint that cannot be met.
+    """
+    wf, ws, limit, residual, robust, max_acc = _check_inputs(
+        params, omega_target, omega_start, deflection_limit, residual, robust,
+        max_angular_acceleration)
+    cap = _speed_cap(params, 1.0 - robust) / 0.98
+    if max(ws, wf) >= cap:
+        what = 'omega_target' if wf >= ws else 'omega_start'
+        band = f' x (1 - robust = {1 - robust:g})' if robust else ''
+        raise ValueError(f'{what} = {max(ws, wf):g} rad/s reaches the lowest natural '
+                         f'frequency{band}, {cap:g} rad/s: no vibration-free arrival there '
+                         '(the static deflection is unbounded or the rod unstable)')
+    band = np.linspace(1 - robust, 1 + robust, BAND_SAMPLES) if robust else []
+    scales = [1.0] + [float(s) for s in band if abs(s - 1.0) > 1e-12]
+    n_free = 12 if robust else 10
+    problem = _Problem(params, ws, wf, limit, residual, scales, max_acc, n_free)
+    for name, w, state in (('omega_target', wf, problem.samples[0].target),
+                           ('omega_start', ws, problem.samples[0].start)):
+        static = math.hypot(state[0], state[1])
+        room = residual if name == 'omega_target' else 0.0
+        if static + room > limit:
+            raise ValueError(f'deflection_limit = {limit:g} m cannot be met: the static '
+                             f'deflection at {name} = {w:g} rad/s is already {static:g} m'
+                             + (f' (+ the residual {residual:g} m)' if room else ''))
+    return _search(problem)
+
+
+def _search(problem: _Problem) -> SpinUpProfile:
+    """Bracket and bisect the duration on the feasibility of the shape optimisation.
+
+    The result is checked on finer grids; when the check fails, the band's worst
+    frequency joins the optimised samples, or the duration grows.
+    """
+    w0 = min(float(problem.params.natural_frequency_radial),
+             float(problem.params.natural_frequency_tangential))
+    period = 2 * math.pi / w0
+    lower = abs(problem.dw) / problem.max_acc if problem.max_acc else 0.0
+    T_max = max(1000.0 * period, 10.0 * lower)
+    eps = max(abs(s - 1.0) for s in problem.scales)
+    # a first guess: two periods, or what resolving the band takes (~ 1 / (eps w0))
+    first = period * max(2.0, 0.7 / eps if eps else 0.0)
+    good = _feasible_from(problem, max(first, 1.6 * lower), problem.initial_shape(), T_max)
+    bad = lower
+    for _ in range(8):
+        while good[0] - bad > DURATION_TOLERANCE * good[0]:
+            T = max(0.5 * (good[0] + bad), 0.6 * good[0])
+            y, ok = problem.solve(T, good[1])
+            if ok:
+                good = (T, y)
+            else:
+                bad = T
+        peak, nominal, band, worst = problem.check(*good)
+        if peak <= problem.limit and nominal <= problem.residual and band <= problem.residual:
+            T, y = good
+            return SpinUpProfile(T, problem.control_points(y), peak_deflection=peak,
+                                 residual_amplitude=nominal, band_residual=band,
+                                 robust=max(abs(s - 1.0) for s in problem.scales))
+        if band > problem.residual and worst not in problem.scales:
+            problem = _with_scale(problem, worst)       # a cutting plane in the band
+        y, ok = problem.solve(*good)
+        if ok and band <= problem.residual:
+            bad = good[0]       # the fine check failed at good: search above it
+            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), y, T_max)
+        elif ok:
+            good = (good[0], y)
+        else:
+            bad = good[0]
+            good = _feasible_from(problem, good[0] * 1.3, good[1], T_max)
+    raise ValueError(_infeasible_message(problem, good[0]))
+
+
+def _feasible_from(problem: _Problem, T: float, y, T_max: float):
+    """The first feasible (T, y) going up from T by factors of 1.6."""
+    while T <= T_max:
+        y_new, ok = problem.solve(T, y)
+        if ok:
+            return T, y_new
+        T *= 1.6
+    raise ValueError(_infeasible_message(problem, T_max))
+
+
+def _with_scale(problem: _Problem, scale: float) -> _Problem:
+    return _Problem(problem.params, problem.ws, problem.wf, problem.limit, problem.residual,
+                    problem.scales + [scale], problem.max_acc, problem.n_free)
+
+
+def _infeasible_message(problem: _Problem, T_max: float) -> str:
+    parts = [f'deflection_limit = {problem.limit:g} m', f'residual = {problem.residual:g} m']
+    if len(problem.scales) > 1:
+        parts.append(f'robust = {max(abs(s - 1) for s in problem.scales):g}')
+    if problem.max_acc is not None:
+        parts.append(f'max_angular_acceleration = {problem.max_acc:g} rad/s^2')
+    return (f'no spin-up from {problem.ws:g} to {problem.wf:g} rad/s within {T_max:g} s '
+            f'meets {", ".join(parts)} together: the residual cannot be brought under '
+            'the limit without breaking the deflection limit')
