@@ -374,7 +374,7 @@ class _Problem:
         fine = _Grid(self.n_free, 4 * STEPS_PER_KNOT)
         c = self.control_points(y)
         X, _ = _propagate(self.samples[:1], fine, T, c)
-        peak = float(np.sqrt(np.max(X[0, :, 0] ** 2 + X[0, :, 1] ** 2)))
+        peak = _peak(X[0, :, 0] ** 2 + X[0, :, 1] ** 2)
         nominal = float(_residuals(self.samples[:1], X)[0][0])
         band, worst = nominal, 1.0
         eps = max(abs(s - 1.0) for s in self.scales)
@@ -385,6 +385,18 @@ class _Problem:
             res = _residuals(samples, Xb)[0]
             band, worst = float(res.max()), float(scales[np.argmax(res)])
         return peak, nominal, band, worst
+
+
+def _peak(r2: np.ndarray) -> float:
+    """Largest |r| from |r|^2 on equal steps: a parabola through the largest sample."""
+    k = int(np.argmax(r2))
+    top = r2[k]
+    if 0 < k < len(r2) - 1:
+        a, b, c = r2[k - 1], r2[k], r2[k + 1]
+        curv = a - 2 * b + c
+        if curv < 0:
+            top = b - 0.125 * (c - a) ** 2 / curv
+    return float(math.sqrt(top))
 
 
 def _speed_cap(params: RodParams, scale: float) -> float:
@@ -499,7 +511,9 @@ def _search(problem: _Problem) -> SpinUpProfile:
         else:
             bad = good[0]
             good = _feasible_from(problem, good[0] * 1.3, good[1], T_max)
-    raise ValueError(_infeasible_message(problem, good[0]))
+    raise ValueError(f'no plan from {problem.ws:g} to {problem.wf:g} rad/s passed the final '
+                     f'check on a finer grid (last tried {good[0]:g} s): the constraints are '
+                     'too close to what the linear model can resolve')
 
 
 def _feasible_from(problem: _Problem, T: float, y, T_max: float):
