@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import BSpline
-from scipy.optimize import minimize
+from scipy.optimize import lsq_linear, minimize
 
 from .checks import finite_number
 from .expm import expm_batch
@@ -34,8 +34,10 @@ from .profiles import SpinUpProfile, spin_up_knots
 
 _GAUSS = math.sqrt(3.0) / 6.0
 _C3 = math.sqrt(3.0) / 12.0
-STEPS_PER_KNOT = 8
+STEPS_PER_KNOT = 6
 """Magnus steps per knot interval while optimising (4x more for the final check)."""
+MAX_STEPS_PER_KNOT = 24
+"""Finest optimisation grid, reached by doubling when the final check disagrees."""
 BAND_SAMPLES = 5
 """Natural-frequency samples across a robust band used by the optimiser."""
 BAND_CHECK = 41
@@ -46,10 +48,16 @@ SHAPE_BOUND = 0.3
 """Control points stay within the start..target range widened by this fraction."""
 RESIDUAL_MARGIN = 0.1
 """The optimiser aims at (1 - margin) x residual; the final check uses residual."""
-LIMIT_MARGIN = 1e-4
+LIMIT_MARGIN = 5e-4
 """The optimiser keeps |r| <= (1 - margin) x deflection_limit on its time grid."""
 DURATION_TOLERANCE = 0.02
 """Relative width of the final duration bracket."""
+GAUSS_NEWTON = True
+"""Start each shape optimisation with constrained Gauss-Newton steps (then SLSQP)."""
+GIVE_UP = 3.0
+"""After Gauss-Newton, a duration is judged infeasible without SLSQP when the largest
+residual is still above this multiple of the aim while the deflection stays clear of
+its limit (the residual, not the limit, stalled)."""
 STALL = 25
 """An optimisation stops as infeasible when the best of its last STALL iterations
 is still above 1.5x the aim and less than 20 % below the best before them."""
@@ -202,8 +210,10 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
     B = len(samples)
     X = np.empty((B, grid.n + 1, 5))
     X[:, 0] = [s.start for s in samples]
+    x = X[:, 0, :, None]
     for j in range(grid.n):
-        X[:, j + 1] = np.einsum('bij,bj->bi', phi[:, j], X[:, j])
+        x = phi[:, j] @ x
+        X[:, j + 1] = x[..., 0]
     if free is None:
         return X, None
     # d(Omega)/dp for p = w(t1), w'(t1), w(t2), w'(t2), and T at fixed speeds
@@ -233,9 +243,13 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
     return X, S
 
 
-def _residuals(samples, X, S=None):
-    """Residual amplitude of each sample at the end (and its gradient)."""
-    out, grad = [], []
+def _residuals(samples, X, S=None, parts=False):
+    """Residual amplitude of each sample at the end (and its gradient).
+
+    With ``parts``, also the whirl components (complex, all samples) and their
+    derivatives, whose moduli the amplitudes add up.
+    """
+    out, grad, vals, dvals = [], [], [], []
     for b, s in enumerate(samples):
         val = s.rows @ (X[b, -1, :4] - s.target)
         mag = np.abs(val)
@@ -244,6 +258,10 @@ def _residuals(samples, X, S=None):
             dval = s.rows @ S[b, -1, :4]
             grad.append(((np.conj(val)[:, None] * dval).real
                          / np.maximum(mag, 1e-300)[:, None]).sum(axis=0))
+            vals.append(val)
+            dvals.append(dval)
+    if parts:
+        return np.array(out), np.array(grad), np.concatenate(vals), np.concatenate(dvals)
     return np.array(out), (np.array(grad) if S is not None else None)
 
 
@@ -251,7 +269,7 @@ class _Problem:
     """The shape optimisation at one duration, and the feasibility checks."""
 
     def __init__(self, params, omega_start, omega_target, limit, residual, scales,
-                 max_acc, n_free):
+                 max_acc, n_free, steps=STEPS_PER_KNOT):
         self.params = params
         self.ws, self.wf = omega_start, omega_target
         self.dw = omega_target - omega_start
@@ -260,7 +278,8 @@ class _Problem:
         self.free = np.arange(2, n_free + 2)
         self.scales = list(scales)
         self.samples = [_sample(params, s, omega_start, omega_target) for s in self.scales]
-        self.grid = _Grid(n_free, STEPS_PER_KNOT)
+        self.steps = steps
+        self.grid = _Grid(n_free, steps)
         self.windows = np.array_split(np.arange(self.grid.n + 1), WINDOWS)
         lo, hi = sorted((omega_start, omega_target))
         cap = _speed_cap(params, max(self.scales[0], min(self.scales)))
@@ -290,10 +309,72 @@ class _Problem:
     def evaluate(self, T, y):
         X, S = _propagate(self.samples, self.grid, T, self.control_points(y), self.free)
         S = S[..., :-1] * self.dw
-        res, dres = _residuals(self.samples, X, S)
+        res, dres, val, dval = _residuals(self.samples, X, S, parts=True)
         r2 = X[0, :, 0] ** 2 + X[0, :, 1] ** 2
         dr2 = 2 * (X[0, :, 0, None] * S[0, :, 0] + X[0, :, 1, None] * S[0, :, 1])
-        return res, dres, r2, dr2
+        return res, dres, r2, dr2, val, dval
+
+    def gauss_newton(self, T, y, ev, feasible, aim, d2, acc, iterations=30):
+        """Drive the whirl components to zero by constrained Gauss-Newton steps.
+
+        Each step minimises sum_b weight_b |components_b + J_b d|^2 (scaled by the
+        aim) over the step d, with the deflection limit linearised in each window and
+        within a trust region; a step is kept when it lowers that sum plus a penalty
+        on the deflection excess. When the steps stall, the samples of the band are
+        reweighted in proportion to their residuals (Lawson's iteration towards the
+        smallest largest residual).
+        """
+        sizes = [len(s.rows) for s in self.samples]
+        owner = np.repeat(np.arange(len(sizes)), sizes)
+        weights = np.ones(len(sizes))
+
+        def merit(e):
+            _, _, r2, _, val, _ = e
+            peaks = np.array([r2[w].max() for w in self.windows])
+            return (np.sum(weights[owner] * np.abs(val) ** 2) / aim**2
+                    + 1e3 * np.sum(np.maximum(peaks / d2 - 1.0, 0.0)))
+
+        lo, hi = self.bounds[0]
+        radius = 0.2
+        e = ev(y)
+        m = merit(e)
+        history = [e[0].max()]
+        for _ in range(iterations):
+            if feasible(y):
+                return y
+            res, _, r2, dr2, val, dval = e
+            sw = np.sqrt(weights[owner])
+            r = np.r_[sw * val.real, sw * val.imag] / aim
+            J = np.r_[sw[:, None] * dval.real, sw[:, None] * dval.imag] / aim
+            at = [w[np.argmax(r2[w])] for w in self.windows]
+            C, c = dr2[at] / d2, 1.0 - r2[at] / d2          # C d <= c, linearised
+            if acc is not None:
+                C, c = np.r_[C, acc[0]], np.r_[c, acc[1] - acc[0] @ y]
+            bounds = (np.maximum(lo - y, -radius), np.minimum(hi - y, radius))
+            d = _bounded_least_squares(J, -r, C, c, bounds)
+            stalled = not np.all(np.isfinite(d)) or np.max(np.abs(d)) < 1e-8
+            if not stalled:
+                e_new = ev(y + d)
+                m_new = merit(e_new)
+                if m_new < m:
+                    y, e, m = y + d, e_new, m_new
+                    radius = min(2 * radius, 0.5)
+                else:
+                    radius *= 0.3
+                    stalled = radius < 1e-4
+            if stalled:
+                if len(weights) == 1:
+                    break
+                weights = weights * e[0] / np.max(e[0])     # Lawson: weight the worst
+                weights /= weights.max()
+                m = merit(e)
+                radius = 0.2
+            history.append(e[0].max())
+            # far from the aim and no longer improving, the limit not in the way
+            if len(history) > 6 and history[-1] > GIVE_UP * aim \
+                    and history[-1] > 0.7 * history[-7] and e[2].max() < 0.98 * d2:
+                break
+        return y
 
     def solve(self, T, y0, maxiter=60):
         """Minimise the largest residual at duration T; (y, feasible, largest residual)."""
@@ -311,12 +392,12 @@ class _Problem:
         d2 = (self.limit * (1 - LIMIT_MARGIN)) ** 2
 
         def cons(z):
-            res, _, r2, _ = ev(z)
+            res, _, r2, _, _, _ = ev(z)
             peaks = np.array([r2[w].max() for w in self.windows])
             return np.r_[z[-1] - res / aim, 1.0 - peaks / d2]
 
         def jac(z):
-            res, dres, r2, dr2 = ev(z)
+            res, dres, r2, dr2, _, _ = ev(z)
             at = [w[np.argmax(r2[w])] for w in self.windows]
             return np.r_[np.c_[-dres / aim, np.ones(len(res))],
                          np.c_[-dr2[at] / d2, np.zeros(len(at))]]
@@ -330,7 +411,7 @@ class _Problem:
             constraints.append({'type': 'ineq', 'fun': lambda z: b - Az @ z,
                                 'jac': lambda z: -Az})
         def feasible(y):
-            res, _, r2, _ = ev(np.r_[y, 0.0])
+            res, _, r2, _, _, _ = ev(np.r_[y, 0.0])
             ok = res.max() <= aim and r2.max() <= d2
             if ok and self.max_acc is not None:
                 ok = bool(np.all(constraints[1]['fun'](np.r_[y, 0.0]) >= -1e-12))
@@ -354,6 +435,16 @@ class _Problem:
         y0 = np.clip(y0, *self.bounds[0])
         if feasible(y0):
             return y0, True
+        if GAUSS_NEWTON:
+            acc = None
+            if self.max_acc is not None:
+                acc = (Az[:, :-1], b)
+            y0 = self.gauss_newton(T, y0, lambda y: ev(np.r_[y, 0.0]), feasible, aim, d2, acc)
+            if feasible(y0):
+                return y0, True
+            res, _, r2, _, _, _ = ev(np.r_[y0, 0.0])
+            if res.max() > GIVE_UP * aim and r2.max() < 0.98 * d2:
+                return y0, False        # the residual stalled, the limit is not in the way
         z0 = np.r_[y0, ev(np.r_[y0, 0.0])[0].max() / aim * 1.01]
         sol = minimize(lambda z: z[-1], z0, jac=lambda z: np.r_[np.zeros(self.n_free), 1.0],
                        method='SLSQP', constraints=constraints,
@@ -371,7 +462,7 @@ class _Problem:
 
         The band (robust only) is checked on BAND_CHECK natural frequencies.
         """
-        fine = _Grid(self.n_free, 4 * STEPS_PER_KNOT)
+        fine = _Grid(self.n_free, 4 * self.steps)
         c = self.control_points(y)
         X, _ = _propagate(self.samples[:1], fine, T, c)
         peak = _peak(X[0, :, 0] ** 2 + X[0, :, 1] ** 2)
@@ -385,6 +476,29 @@ class _Problem:
             res = _residuals(samples, Xb)[0]
             band, worst = float(res.max()), float(scales[np.argmax(res)])
         return peak, nominal, band, worst
+
+
+def _bounded_least_squares(J, rhs, C, c, bounds, rounds=6):
+    """Least squares |J d - rhs| within bounds and C d <= c (linear), by an active set.
+
+    Rows of C that a solution breaks join the least-squares problem as heavily
+    weighted equations C_i d = c_i (they would be active), until none is broken.
+    """
+    weight = 1e4 * max(np.linalg.norm(J), 1.0)
+    active = np.flatnonzero(c < 0)
+    lower, upper = bounds
+    lower = np.minimum(lower, 0.0)
+    upper = np.maximum(upper, 0.0)
+    for _ in range(rounds):
+        scale = weight / np.maximum(np.linalg.norm(C[active], axis=1), 1e-300)
+        A = np.r_[J, scale[:, None] * C[active]]
+        b = np.r_[rhs, scale * c[active]]
+        d = lsq_linear(A, b, bounds=(lower, upper), method='bvls').x
+        broken = np.setdiff1d(np.flatnonzero(C @ d > c + 1e-9 * (1 + np.abs(c))), active)
+        if broken.size == 0:
+            break
+        active = np.union1d(active, broken)
+    return d
 
 
 def _peak(r2: np.ndarray) -> float:
@@ -500,17 +614,21 @@ def _search(problem: _Problem) -> SpinUpProfile:
             return SpinUpProfile(T, problem.control_points(y), peak_deflection=peak,
                                  residual_amplitude=nominal, band_residual=band,
                                  robust=max(abs(s - 1.0) for s in problem.scales))
-        if band > problem.residual and worst not in problem.scales:
-            problem = _with_scale(problem, worst)       # a cutting plane in the band
+        coarse = peak > problem.limit or nominal > problem.residual
+        if coarse and problem.steps < MAX_STEPS_PER_KNOT:
+            problem = _refined(problem, problem.scales, 2 * problem.steps)
+        elif not coarse and worst not in problem.scales:
+            problem = _refined(problem, problem.scales + [worst], problem.steps)
+        else:       # the check failed at good with the finest settings: search above it
+            bad = good[0]
+            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
+            continue
         y, ok = problem.solve(*good)
-        if ok and band <= problem.residual:
-            bad = good[0]       # the fine check failed at good: search above it
-            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), y, T_max)
-        elif ok:
+        if ok:
             good = (good[0], y)
         else:
             bad = good[0]
-            good = _feasible_from(problem, good[0] * 1.3, good[1], T_max)
+            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
     raise ValueError(f'no plan from {problem.ws:g} to {problem.wf:g} rad/s passed the final '
                      f'check on a finer grid (last tried {good[0]:g} s): the constraints are '
                      'too close to what the linear model can resolve')
@@ -526,9 +644,10 @@ def _feasible_from(problem: _Problem, T: float, y, T_max: float):
     raise ValueError(_infeasible_message(problem, T_max))
 
 
-def _with_scale(problem: _Problem, scale: float) -> _Problem:
+def _refined(problem: _Problem, scales, steps: int) -> _Problem:
+    """The same problem with other band samples or a finer optimisation grid."""
     return _Problem(problem.params, problem.ws, problem.wf, problem.limit, problem.residual,
-                    problem.scales + [scale], problem.max_acc, problem.n_free)
+                    scales, problem.max_acc, problem.n_free, steps)
 
 
 def _infeasible_message(problem: _Problem, T_max: float) -> str:
