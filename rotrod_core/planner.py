@@ -38,6 +38,14 @@ STEPS_PER_KNOT = 6
 """Magnus steps per knot interval while optimising (4x more for the final check)."""
 MAX_STEPS_PER_KNOT = 24
 """Finest optimisation grid, reached by doubling when the final check disagrees."""
+MIN_FREE = 10
+"""Fewest free control points (2 more with a robust band)."""
+MAX_FREE = 40
+"""Most free control points."""
+KNOT_SPACING = 0.35
+"""Knot spacing, in periods of the lowest natural frequency, until MAX_FREE is reached:
+the shape must resolve the vibration it cancels."""
+"""Finest optimisation grid, reached by doubling when the final check disagrees."""
 BAND_SAMPLES = 5
 """Natural-frequency samples across a robust band used by the optimiser."""
 BAND_CHECK = 41
@@ -306,6 +314,18 @@ class _Problem:
         target = x - np.sin(2 * np.pi * x) / (2 * np.pi) - Bw[:, -2:].sum(axis=1)
         return np.linalg.lstsq(Bw[:, self.free], target, rcond=None)[0]
 
+    def fit(self, c) -> np.ndarray:
+        """Free points (normalised) of this problem's spline closest to control points c."""
+        c = np.asarray(c, dtype=float)
+        if c.size == self.n_free + 4:
+            return (c[2:-2] - self.ws) / self.dw
+        x = np.linspace(0.0, 1.0, 20 * (max(c.size, self.n_free) + 1))
+        w = BSpline(spin_up_knots(c.size - 4), c, 3)(x)
+        Bw, _ = _basis(self.n_free, x)
+        fixed = Bw[:, :2].sum(axis=1) * self.ws + Bw[:, -2:].sum(axis=1) * self.wf
+        full = np.linalg.lstsq(Bw[:, self.free], w - fixed, rcond=None)[0]
+        return np.clip((full - self.ws) / self.dw, *self.bounds[0])
+
     def evaluate(self, T, y):
         X, S = _propagate(self.samples, self.grid, T, self.control_points(y), self.free)
         S = S[..., :-1] * self.dw
@@ -571,8 +591,8 @@ def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float =
                          '(the static deflection is unbounded or the rod unstable)')
     band = np.linspace(1 - robust, 1 + robust, BAND_SAMPLES) if robust else []
     scales = [1.0] + [float(s) for s in band if abs(s - 1.0) > 1e-12]
-    n_free = 12 if robust else 10
-    problem = _Problem(params, ws, wf, limit, residual, scales, max_acc, n_free)
+    family = _Family(params, ws, wf, limit, residual, scales, max_acc)
+    problem = family.problem(0.0)
     for name, w, state in (('omega_target', wf, problem.samples[0].target),
                            ('omega_start', ws, problem.samples[0].start)):
         static = math.hypot(state[0], state[1])
@@ -581,76 +601,106 @@ def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float =
             raise ValueError(f'deflection_limit = {limit:g} m cannot be met: the static '
                              f'deflection at {name} = {w:g} rad/s is already {static:g} m'
                              + (f' (+ the residual {residual:g} m)' if room else ''))
-    return _search(problem)
+    return _search(family)
 
 
-def _search(problem: _Problem) -> SpinUpProfile:
+class _Family:
+    """The shape problems of one request: the knot count grows with the duration.
+
+    A shape is carried between durations as its control points (rad/s), refitted
+    by least squares when the knot count changes.
+    """
+
+    def __init__(self, params, ws, wf, limit, residual, scales, max_acc):
+        self.args = (params, ws, wf, limit, residual)
+        self.params, self.ws, self.wf, self.limit, self.residual = self.args
+        self.scales, self.max_acc = list(scales), max_acc
+        self.steps = STEPS_PER_KNOT
+        self.min_free = MIN_FREE + (2 if len(self.scales) > 1 else 0)
+        w0 = min(float(params.natural_frequency_radial),
+                 float(params.natural_frequency_tangential))
+        self.period = 2 * math.pi / w0
+        self._problems = {}
+
+    def problem(self, T: float) -> _Problem:
+        n_free = int(np.clip(math.ceil(T / (KNOT_SPACING * self.period)) - 1, self.min_free,
+                             MAX_FREE))
+        key = (n_free, self.steps, tuple(self.scales))
+        if key not in self._problems:
+            self._problems[key] = _Problem(*self.args, self.scales, self.max_acc, n_free,
+                                           self.steps)
+        return self._problems[key]
+
+    def solve(self, T: float, c):
+        """Feasible control points at duration T from the shape ``c``: (c, ok)."""
+        problem = self.problem(T)
+        y0 = problem.initial_shape() if c is None else problem.fit(c)
+        y, ok = problem.solve(T, y0)
+        return problem.control_points(y), ok
+
+    def check(self, T: float, c):
+        problem = self.problem(T)
+        return problem.check(T, problem.fit(c))
+
+
+def _search(family: _Family) -> SpinUpProfile:
     """Bracket and bisect the duration on the feasibility of the shape optimisation.
 
-    The result is checked on finer grids; when the check fails, the band's worst
-    frequency joins the optimised samples, or the duration grows.
+    The result is checked on finer grids; when the check fails, the optimisation
+    grid is refined, or the band's worst frequency joins the optimised samples, or
+    the duration grows.
     """
-    w0 = min(float(problem.params.natural_frequency_radial),
-             float(problem.params.natural_frequency_tangential))
-    period = 2 * math.pi / w0
-    lower = abs(problem.dw) / problem.max_acc if problem.max_acc else 0.0
-    T_max = max(1000.0 * period, 10.0 * lower)
-    eps = max(abs(s - 1.0) for s in problem.scales)
+    lower = abs(family.wf - family.ws) / family.max_acc if family.max_acc else 0.0
+    T_max = max(1000.0 * family.period, 10.0 * lower)
+    eps = max(abs(s - 1.0) for s in family.scales)
     # a first guess: two periods, or what resolving the band takes (~ 1 / (eps w0))
-    first = period * max(2.0, 0.7 / eps if eps else 0.0)
-    good = _feasible_from(problem, max(first, 1.6 * lower), problem.initial_shape(), T_max)
+    first = family.period * max(2.0, 0.7 / eps if eps else 0.0)
+    good = _feasible_from(family, max(first, 1.6 * lower), None, T_max)
     bad = lower
     for _ in range(8):
         while good[0] - bad > DURATION_TOLERANCE * good[0]:
             T = max(0.5 * (good[0] + bad), 0.6 * good[0])
-            y, ok = problem.solve(T, good[1])
+            c, ok = family.solve(T, good[1])
             if ok:
-                good = (T, y)
+                good = (T, c)
             else:
                 bad = T
-        peak, nominal, band, worst = problem.check(*good)
-        if peak <= problem.limit and nominal <= problem.residual and band <= problem.residual:
-            T, y = good
-            return SpinUpProfile(T, problem.control_points(y), peak_deflection=peak,
-                                 residual_amplitude=nominal, band_residual=band,
-                                 robust=max(abs(s - 1.0) for s in problem.scales))
-        coarse = peak > problem.limit or nominal > problem.residual
-        if coarse and problem.steps < MAX_STEPS_PER_KNOT:
-            problem = _refined(problem, problem.scales, 2 * problem.steps)
-        elif not coarse and worst not in problem.scales:
-            problem = _refined(problem, problem.scales + [worst], problem.steps)
+        peak, nominal, band, worst = family.check(*good)
+        if peak <= family.limit and nominal <= family.residual and band <= family.residual:
+            T, c = good
+            return SpinUpProfile(T, c, peak_deflection=peak, residual_amplitude=nominal,
+                                 band_residual=band, robust=eps)
+        coarse = peak > family.limit or nominal > family.residual
+        if coarse and family.steps < MAX_STEPS_PER_KNOT:
+            family.steps *= 2
+        elif not coarse and worst not in family.scales:
+            family.scales.append(worst)     # a cutting plane in the band
         else:       # the check failed at good with the finest settings: search above it
             bad = good[0]
-            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
+            good = _feasible_from(family, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
             continue
-        y, ok = problem.solve(*good)
+        c, ok = family.solve(*good)
         if ok:
-            good = (good[0], y)
+            good = (good[0], c)
         else:
             bad = good[0]
-            good = _feasible_from(problem, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
-    raise ValueError(f'no plan from {problem.ws:g} to {problem.wf:g} rad/s passed the final '
+            good = _feasible_from(family, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
+    raise ValueError(f'no plan from {family.ws:g} to {family.wf:g} rad/s passed the final '
                      f'check on a finer grid (last tried {good[0]:g} s): the constraints are '
                      'too close to what the linear model can resolve')
 
 
-def _feasible_from(problem: _Problem, T: float, y, T_max: float):
-    """The first feasible (T, y) going up from T by factors of 1.6."""
+def _feasible_from(family: _Family, T: float, c, T_max: float):
+    """The first feasible (T, control points) going up from T by factors of 1.6."""
     while T <= T_max:
-        y_new, ok = problem.solve(T, y)
+        c_new, ok = family.solve(T, c)
         if ok:
-            return T, y_new
+            return T, c_new
         T *= 1.6
-    raise ValueError(_infeasible_message(problem, T_max))
+    raise ValueError(_infeasible_message(family, T_max))
 
 
-def _refined(problem: _Problem, scales, steps: int) -> _Problem:
-    """The same problem with other band samples or a finer optimisation grid."""
-    return _Problem(problem.params, problem.ws, problem.wf, problem.limit, problem.residual,
-                    scales, problem.max_acc, problem.n_free, steps)
-
-
-def _infeasible_message(problem: _Problem, T_max: float) -> str:
+def _infeasible_message(problem, T_max: float) -> str:
     parts = [f'deflection_limit = {problem.limit:g} m', f'residual = {problem.residual:g} m']
     if len(problem.scales) > 1:
         parts.append(f'robust = {max(abs(s - 1) for s in problem.scales):g}')
