@@ -10,9 +10,10 @@ Method (docs/planner.md): for a given w(t) the deflection equations are linear, 
 the end state of the run fixes the free vibration that follows in closed form: its
 offset from the static deflection, split on the eigenvectors of the constant-speed
 state matrix, gives the two whirls and their amplitudes. w(t) is a clamped cubic
-B-spline (w' = 0 at both ends); for a fixed duration, SLSQP chooses its free control
-points to minimise the largest residual subject to the deflection and acceleration
-limits, with exact gradients from a forward sensitivity of the fourth-order Magnus
+B-spline (w' = 0 at both ends). For a fixed duration its free control points are
+found by constrained Gauss-Newton steps on the whirl components (then, if needed,
+SLSQP on the largest residual), subject to the deflection and acceleration limits,
+with exact gradients from a forward sensitivity of the fourth-order Magnus
 propagator. The duration is found by bracketing and bisection on feasibility, and
 the result is checked afterwards on finer grids (time steps and the robust band).
 """
@@ -397,7 +398,11 @@ class _Problem:
         return y
 
     def solve(self, T, y0, maxiter=60):
-        """Minimise the largest residual at duration T; (y, feasible, largest residual)."""
+        """Look for a feasible shape at duration T from y0: (y, feasible).
+
+        Gauss-Newton first; if that stalls close enough to the aim, SLSQP minimises
+        the largest residual (epigraph form) and stops at the first feasible iterate.
+        """
         cache = {}
 
         def ev(z):
