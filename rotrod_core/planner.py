@@ -39,6 +39,8 @@ STEPS_PER_KNOT = 6
 """Magnus steps per knot interval while optimising (4x more for the final check)."""
 MAX_STEPS_PER_KNOT = 24
 """Finest optimisation grid, reached by doubling when the final check disagrees."""
+MAGNUS_STEP = 1.0
+"""Largest Magnus step times the fastest free-vibration rate, w0 (1 + eps) + |w|."""
 MIN_FREE = 10
 """Fewest free control points (2 more with a robust band)."""
 MAX_FREE = 40
@@ -48,7 +50,7 @@ KNOT_SPACING = 0.35
 the shape must resolve the vibration it cancels."""
 """Finest optimisation grid, reached by doubling when the final check disagrees."""
 BAND_SAMPLES = 5
-"""Natural-frequency samples across a robust band used by the optimiser."""
+"""Fewest natural-frequency samples across a robust band used by the optimiser."""
 BAND_CHECK = 41
 """Natural-frequency samples across the band in the final check."""
 WINDOWS = 40
@@ -485,7 +487,8 @@ class _Problem:
     def check(self, T, y):
         """Check on a 4x finer time grid: (peak, nominal residual, band max, its scale).
 
-        The band (robust only) is checked on BAND_CHECK natural frequencies.
+        The band (robust only) is checked on BAND_CHECK natural frequencies, or 4 per
+        optimised sample if more.
         """
         fine = _Grid(self.n_free, 4 * self.steps)
         c = self.control_points(y)
@@ -495,7 +498,7 @@ class _Problem:
         band, worst = nominal, 1.0
         eps = max(abs(s - 1.0) for s in self.scales)
         if eps > 0:
-            scales = np.linspace(1 - eps, 1 + eps, BAND_CHECK)
+            scales = np.linspace(1 - eps, 1 + eps, max(BAND_CHECK, 4 * len(self.scales)))
             samples = [_sample(self.params, s, self.ws, self.wf) for s in scales]
             Xb, _ = _propagate(samples, fine, T, c)
             res = _residuals(samples, Xb)[0]
@@ -594,9 +597,7 @@ def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float =
         raise ValueError(f'{what} = {max(ws, wf):g} rad/s reaches the lowest natural '
                          f'frequency{band}, {cap:g} rad/s: no vibration-free arrival there '
                          '(the static deflection is unbounded or the rod unstable)')
-    band = np.linspace(1 - robust, 1 + robust, BAND_SAMPLES) if robust else []
-    scales = [1.0] + [float(s) for s in band if abs(s - 1.0) > 1e-12]
-    family = _Family(params, ws, wf, limit, residual, scales, max_acc)
+    family = _Family(params, ws, wf, limit, residual, robust, max_acc)
     problem = family.problem(0.0)
     for name, w, state in (('omega_target', wf, problem.samples[0].target),
                            ('omega_start', ws, problem.samples[0].start)):
@@ -616,12 +617,13 @@ class _Family:
     by least squares when the knot count changes.
     """
 
-    def __init__(self, params, ws, wf, limit, residual, scales, max_acc):
+    def __init__(self, params, ws, wf, limit, residual, robust, max_acc):
         self.args = (params, ws, wf, limit, residual)
         self.params, self.ws, self.wf, self.limit, self.residual = self.args
-        self.scales, self.max_acc = list(scales), max_acc
+        self.eps, self.max_acc = robust, max_acc
+        self.extra = []         # band frequencies added by the final checks
         self.steps = STEPS_PER_KNOT
-        self.min_free = MIN_FREE + (2 if len(self.scales) > 1 else 0)
+        self.min_free = MIN_FREE + (2 if robust else 0)
         w0 = min(float(params.natural_frequency_radial),
                  float(params.natural_frequency_tangential))
         self.period = 2 * math.pi / w0
@@ -630,11 +632,29 @@ class _Family:
     def problem(self, T: float) -> _Problem:
         n_free = int(np.clip(math.ceil(T / (KNOT_SPACING * self.period)) - 1, self.min_free,
                              MAX_FREE))
-        key = (n_free, self.steps, tuple(self.scales))
+        # the Magnus series needs h |A| well below pi: h (w0 + |w|) <= MAGNUS_STEP
+        w0 = 2 * math.pi / self.period
+        fastest = w0 * (1 + self.eps) + max(self.ws, self.wf)
+        steps = max(self.steps, math.ceil(T * fastest / (MAGNUS_STEP * (n_free + 1))))
+        scales = self.scales(T)
+        key = (n_free, steps, tuple(scales))
         if key not in self._problems:
-            self._problems[key] = _Problem(*self.args, self.scales, self.max_acc, n_free,
-                                           self.steps)
+            self._problems[key] = _Problem(*self.args, scales, self.max_acc, n_free, steps)
         return self._problems[key]
+
+    def scales(self, T: float) -> list:
+        """Natural-frequency factors optimised at duration T, nominal first.
+
+        The residual, as a function of w0, oscillates about once per 2 pi / T: the
+        band is sampled ~3 times per oscillation, BAND_SAMPLES at least.
+        """
+        if not self.eps:
+            return [1.0]
+        w0 = 2 * math.pi / self.period
+        n = max(BAND_SAMPLES, math.ceil(3 * self.eps * w0 * T / math.pi) + 1)
+        n += 1 - n % 2          # odd: the nominal is one of them
+        band = np.linspace(1 - self.eps, 1 + self.eps, n)
+        return [1.0] + [float(s) for s in band if abs(s - 1.0) > 1e-12] + self.extra
 
     def solve(self, T: float, c):
         """Feasible control points at duration T from the shape ``c``: (c, ok)."""
@@ -657,7 +677,7 @@ def _search(family: _Family) -> SpinUpProfile:
     """
     lower = abs(family.wf - family.ws) / family.max_acc if family.max_acc else 0.0
     T_max = max(1000.0 * family.period, 10.0 * lower)
-    eps = max(abs(s - 1.0) for s in family.scales)
+    eps = family.eps
     # a first guess: two periods, or what resolving the band takes (~ 1 / (eps w0))
     first = family.period * max(2.0, 0.7 / eps if eps else 0.0)
     good = _feasible_from(family, max(first, 1.6 * lower), None, T_max)
@@ -678,8 +698,8 @@ def _search(family: _Family) -> SpinUpProfile:
         coarse = peak > family.limit or nominal > family.residual
         if coarse and family.steps < MAX_STEPS_PER_KNOT:
             family.steps *= 2
-        elif not coarse and worst not in family.scales:
-            family.scales.append(worst)     # a cutting plane in the band
+        elif not coarse and worst not in family.scales(good[0]):
+            family.extra.append(worst)      # a cutting plane in the band
         else:       # the check failed at good with the finest settings: search above it
             bad = good[0]
             good = _feasible_from(family, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
@@ -705,12 +725,13 @@ def _feasible_from(family: _Family, T: float, c, T_max: float):
     raise ValueError(_infeasible_message(family, T_max))
 
 
-def _infeasible_message(problem, T_max: float) -> str:
+def _infeasible_message(problem: _Family, T_max: float) -> str:
     parts = [f'deflection_limit = {problem.limit:g} m', f'residual = {problem.residual:g} m']
-    if len(problem.scales) > 1:
-        parts.append(f'robust = {max(abs(s - 1) for s in problem.scales):g}')
+    if problem.eps:
+        parts.append(f'robust = {problem.eps:g}')
     if problem.max_acc is not None:
         parts.append(f'max_angular_acceleration = {problem.max_acc:g} rad/s^2')
-    return (f'no spin-up from {problem.ws:g} to {problem.wf:g} rad/s within {T_max:g} s '
-            f'meets {", ".join(parts)} together: the residual cannot be brought under '
-            'the limit without breaking the deflection limit')
+    return (f'no spin-up from {problem.ws:g} to {problem.wf:g} rad/s found within '
+            f'{T_max:g} s that meets {", ".join(parts)} together: the residual could not '
+            'be brought under its bound within the deflection limit'
+            + (' and the acceleration bound' if problem.max_acc is not None else ''))
