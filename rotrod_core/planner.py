@@ -61,6 +61,12 @@ RESIDUAL_MARGIN = 0.1
 """The optimiser aims at (1 - margin) x residual; the final check uses residual."""
 LIMIT_MARGIN = 5e-4
 """The optimiser keeps |r| <= (1 - margin) x deflection_limit on its time grid."""
+RESOLUTION = 1e-7
+"""Smallest residual asked for, relative to the static deflections of the request: the
+optimisation grid computes the end state to ~1e-9 of them."""
+MAX_PERIODS = 1000
+"""The duration search gives up beyond this many periods of w0 (or 4x the shortest
+duration the acceleration bound allows, if longer)."""
 DURATION_TOLERANCE = 0.02
 """Relative width of the final duration bracket."""
 GAUSS_NEWTON = True
@@ -607,7 +613,20 @@ def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float =
             raise ValueError(f'deflection_limit = {limit:g} m cannot be met: the static '
                              f'deflection at {name} = {w:g} rad/s is already {static:g} m'
                              + (f' (+ the residual {residual:g} m)' if room else ''))
+    scale = max(math.hypot(*problem.samples[0].target[:2]),
+                math.hypot(*problem.samples[0].start[:2]), r0_floor(params))
+    if residual < RESOLUTION * scale:
+        raise ValueError(f'residual = {residual:g} m is below what the planner resolves: '
+                         f'{RESOLUTION:g} x the deflection scale {scale:g} m')
     return _search(family)
+
+
+def r0_floor(params: RodParams) -> float:
+    """A deflection scale that is never zero: the static deflection at 1 % of w0."""
+    w = 0.01 * min(float(params.natural_frequency_radial),
+                   float(params.natural_frequency_tangential))
+    return max(w * w * float(params.eccentricity) / (
+        float(params.stiffness_radial) / float(params.mass)), 1e-12)
 
 
 class _Family:
@@ -676,7 +695,7 @@ def _search(family: _Family) -> SpinUpProfile:
     the duration grows.
     """
     lower = abs(family.wf - family.ws) / family.max_acc if family.max_acc else 0.0
-    T_max = max(1000.0 * family.period, 10.0 * lower)
+    T_max = max(MAX_PERIODS * family.period, 4.0 * lower)
     eps = family.eps
     # a first guess: two periods, or what resolving the band takes (~ 1 / (eps w0))
     first = family.period * max(2.0, 0.7 / eps if eps else 0.0)

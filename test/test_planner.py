@@ -19,6 +19,7 @@ from rotrod_core import (
     SpinUpProfile,
     make_profile,
     plan_spin_up,
+    planner,
     simulate,
     whirl_residual,
 )
@@ -213,12 +214,19 @@ def test_eq26_leaves_more_residual_than_the_plan(nominal):
     ({'robust': -0.1}, 'robust'),
     ({'robust': 1.0}, 'robust'),
     ({'max_angular_acceleration': -1.0}, 'max_angular_acceleration'),
-    ({'max_angular_acceleration': 0.001, 'residual': 1e-12}, 'cannot'),
+    ({'residual': 1e-12}, 'below what the planner resolves'),
 ])
 def test_refusals_name_the_constraint(kwargs, message):
     kwargs = {'omega_target': 2.0, **kwargs}
     with pytest.raises(ValueError, match=message):
         plan_spin_up(TABLE1, **kwargs)
+
+
+def test_a_request_not_met_within_the_search_says_which_constraints(monkeypatch):
+    monkeypatch.setattr(planner, 'MAX_PERIODS', 3)      # 1.55 s: the robust plan needs 2.4
+    with pytest.raises(ValueError, match='no spin-up from 0 to 2 rad/s found within 1.55'
+                       '.*deflection_limit = 0.003 m, residual = 1e-06 m, robust = 0.1'):
+        plan_spin_up(TABLE1, 2.0, robust=0.1, residual=1e-6)
 
 
 def test_refuses_a_batch_of_parameters():
