@@ -16,6 +16,7 @@ CONSOLE_SCRIPTS = [
     'simulator = rotrod_ros.simulator:main',
     'profile_publisher = rotrod_ros.profile_publisher:main',
     'rerun_logger = rotrod_ros.rerun_logger:main',
+    'rig_monitor = rotrod_ros.rig_monitor:main',
 ]
 
 setup(

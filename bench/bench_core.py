@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / 'test'), str(ROOT / 'bench')]
 
 import results  # noqa: E402  (bench/results.py)
-from reference import eq26 as eq26_scalar  # noqa: E402  (MODEL.md's Eq. 26, scalar)
+from reference import eq26 as eq26_scalar  # noqa: E402  (docs/model.md's Eq. 26, scalar)
 from results import Comparison, Row, Target  # noqa: E402
 
 from rotrod_core import (  # noqa: E402

@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / 'test'), str(ROOT / 'bench')]
 
 import results  # noqa: E402  (bench/results.py)
-from reference import W0, eq26  # noqa: E402  (MODEL.md's closed forms)
+from reference import W0, eq26  # noqa: E402  (docs/model.md's closed forms)
 from results import Comparison, Row, Target  # noqa: E402
 
 from rotrod_core import (  # noqa: E402

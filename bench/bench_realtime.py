@@ -20,9 +20,12 @@ process's subscriptions:
   with a CPU wake-up latency request of 0 us (idle CPUs poll instead of halting);
 * the same real-time run with the experimental EventsExecutor (parameter
   ``executor:=events``), and with ordinary scheduling of the physics thread
-  (``realtime_priority:=0``; the default runs it at SCHED_FIFO priority 50), and
-  without the node's CPU wake-up latency request (``cpu_dma_latency:=-1``; the
-  default holds 0 us while paced), for comparison.
+  (``realtime_priority:=0``), and without the node's CPU wake-up latency request
+  (``cpu_dma_latency:=-1``, the node's default), for comparison.
+
+Every simulator is started with ``config/realtime.yaml`` (SCHED_FIFO priority 50 and
+the machine-wide CPU wake-up latency request of 0 us while paced, both opt-in), then
+the run's own parameters, which override it.
 
 Prints a Markdown table and writes JSON if asked; ``measure()`` returns the rows
 (bench/results.py). The node processes run the code of this checkout: PYTHONPATH is
@@ -70,6 +73,8 @@ from std_msgs.msg import Float64  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 PERIOD = 0.01
+REALTIME_PARAMS = ROOT / 'config' / 'realtime.yaml'
+"""The opt-in real-time settings every benchmarked simulator starts with."""
 
 
 class Simulator:
@@ -79,8 +84,9 @@ class Simulator:
     """Parameters given to every simulator started (--param)."""
 
     def __init__(self, **params):
-        cmd = [*console_script('simulator'),
-               *ros_arguments(params={**Simulator.extra, **params})]
+        ros_args = ros_arguments(params={**Simulator.extra, **params})
+        cmd = [*console_script('simulator'), ros_args[0], '--params-file',
+               str(REALTIME_PARAMS), *ros_args[1:]]
         self.proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                      text=True)
 

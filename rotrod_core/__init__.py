@@ -16,7 +16,14 @@ from .analysis import (
     static_deflection,
 )
 from .batch import BatchResult, simulate_batch
-from .critical import critical_speed, critical_speed_for_profile
+from .critical import critical_speed, critical_speed_for_profile, critical_speed_from
+from .identify import (
+    NotIdentifiable,
+    RigEstimate,
+    RigIdentifier,
+    identify_rig,
+    rig_cramer_rao,
+)
 from .model import State
 from .params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
 from .planner import plan_spin_up, whirl_residual
@@ -45,12 +52,13 @@ from .whirl import (
 
 __all__ = [
     'BatchResult', 'CampbellDiagram', 'ConstantProfile', 'DEFAULT_HUB_INERTIA',
-    'Eq26Profile', 'ModalAnalysis', 'Mode', 'NonFiniteStateError', 'Profile', 'RampProfile',
-    'RealTimeStepper', 'RodParams', 'SimulationResult', 'SineSweepProfile', 'State',
+    'Eq26Profile', 'ModalAnalysis', 'Mode', 'NonFiniteStateError', 'NotIdentifiable',
+    'Profile', 'RampProfile', 'RealTimeStepper', 'RigEstimate', 'RigIdentifier',
+    'RodParams', 'SimulationResult', 'SineSweepProfile', 'State',
     'StepProfile',
     'TableProfile', 'Whirl', 'WhirlEstimate', 'WhirlEstimator', 'WhirlSettings', 'campbell',
-    'critical_speed', 'critical_speed_for_profile', 'disk_inertia', 'dynamic_frequencies',
-    'estimate_whirl', 'estimate_whirl_frequencies', 'make_profile', 'modal_analysis',
-    'plan_spin_up', 'simulate', 'simulate_batch', 'SpinUpProfile', 'static_deflection',
-    'whirl_residual',
+    'critical_speed', 'critical_speed_for_profile', 'critical_speed_from', 'disk_inertia',
+    'dynamic_frequencies', 'estimate_whirl', 'estimate_whirl_frequencies', 'identify_rig',
+    'make_profile', 'modal_analysis', 'plan_spin_up', 'rig_cramer_rao',
+    'simulate', 'simulate_batch', 'SpinUpProfile', 'static_deflection', 'whirl_residual',
 ]

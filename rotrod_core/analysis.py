@@ -37,8 +37,10 @@ def dynamic_frequencies(params: RodParams, omega):
     """The two dynamic frequencies (f1, f2) in Hz at constant angular velocity ``omega``.
 
     Eq. 28: f1 = |w0 - |w|| / 2pi, f2 = (w0 + |w|) / 2pi, for an isotropic rod (the
-    sense of rotation does not matter). For k1 != k2 or with damping, the two damped
-    frequencies of :func:`modal_analysis`, lower first. Vectorized over ``omega``.
+    sense of rotation does not matter), w0 = sqrt(k/M) (:attr:`RodParams.natural_frequency`,
+    with the axial load of gravity and the rod's modal mass). For k1 != k2 or with
+    damping, the two damped frequencies of :func:`modal_analysis`, lower first.
+    Vectorized over ``omega``.
     """
     w = _omega_array(omega)
     if params.is_isotropic and not np.any(np.asarray(params.damping_ratio) > 0):
@@ -225,18 +227,21 @@ def campbell(params: RodParams, omegas, edge_tolerance: float = 1e-9) -> Campbel
 def static_deflection(params: RodParams, omega):
     """Steady (eccentric) deflection (u_s, v_s) in m at constant ``omega`` (rad/s).
 
-    u_s = m w^2 r0 / (k1 - m w^2), v_s = 0 (also with damping and any k2). Infinite at
-    w^2 = k1/m; negative above it (an equilibrium that is not reached from rest).
+    u_s = Me w^2 r0 / (k1 - M w^2), v_s = 0 (also with damping and any k2), with the
+    modal and eccentric masses M, Me (both m for a massless rod: the paper's
+    m w^2 r0 / (k1 - m w^2)) and k1 including the axial load of gravity. Infinite at
+    w^2 = k1/M; negative above it (an equilibrium that is not reached from rest).
     Vectorized over ``omega`` and batch parameters.
     """
     w = _omega_array(omega)
-    k1, m, r0 = params.stiffness_radial, params.mass, params.eccentricity
-    # u_s = r0 / (k1 / (m w^2) - 1): finite where m w^2 overflows (u_s -> -r0) or
+    k1, m = params.stiffness_radial, params.modal_mass
+    re = params.eccentricity * (params.eccentric_mass / m)     # the load radius
+    # u_s = re / (k1 / (M w^2) - 1): finite where M w^2 overflows (u_s -> -re) or
     # underflows (u_s -> 0), where the quotient of the two overflowed was NaN
     with np.errstate(divide='ignore', over='ignore', invalid='ignore'):
         q = k1 / (m * (w * w)) - 1.0
-        u = np.where(q == 0, np.inf, r0 / np.where(q == 0, 1.0, q))
-    u = u + 0.0 * np.asarray(r0)
+        u = np.where(q == 0, np.inf, re / np.where(q == 0, 1.0, q))
+    u = u + 0.0 * np.asarray(re)
     v = np.zeros_like(u)
     if u.ndim == 0:
         return float(u), 0.0
@@ -246,13 +251,13 @@ def static_deflection(params: RodParams, omega):
 def tangential_bending(params: RodParams, omega_dot):
     """Quasi-static tangential deflection |v| (m) under a steady hub acceleration.
 
-    From Eq. 17 with v'' = v' = 0 and w small: k2 v = -m w' r0, so
-    |v| = |w'| r0 m / k2 for an angular acceleration ``omega_dot`` (rad/s^2). A sudden
-    w' overshoots to twice this. Vectorized. +inf where the product overflows (beyond
-    any deflection limit).
+    From Eq. 17 with v'' = v' = 0 and w small: k2 v = -Me w' r0 (Me = m for a
+    massless rod), so |v| = |w'| r0 Me / k2 for an angular acceleration
+    ``omega_dot`` (rad/s^2). A sudden w' overshoots to twice this. Vectorized. +inf
+    where the product overflows (beyond any deflection limit).
     """
     wd = np.abs(_omega_array(omega_dot, 'omega_dot'))
     with np.errstate(over='ignore'):
-        v = wd * params.eccentricity * params.mass / params.stiffness_tangential
+        v = wd * params.eccentricity * params.eccentric_mass / params.stiffness_tangential
     v = np.asarray(v, dtype=float)
     return float(v) if v.ndim == 0 else v

@@ -24,15 +24,17 @@ from .critical import STARTS, critical_speed, critical_speed_for_profile
 from .model import COUPLINGS
 from .params import RodParams
 from .planner import plan_spin_up
-from .profiles import PROFILES, Eq26Profile, TableProfile, make_profile
+from .profiles import OPTION_PROFILES, PROFILE_OPTIONS, Eq26Profile, profile_from_options
 from .simulate import simulate
 from .stages import format_stage_table, stage_extremes
 
 PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
-                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness')
+                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness',
+                'gravity', 'rod_density')
 UNITS = {'mass': 'kg', 'rod_length': 'm', 'rod_diameter': 'm', 'youngs_modulus': 'Pa',
          'eccentricity': 'm', 'hub_inertia': 'kg m^2', 'damping_ratio': '-',
-         'section_width': 'm', 'section_thickness': 'm'}
+         'section_width': 'm', 'section_thickness': 'm', 'gravity': 'm/s^2',
+         'rod_density': 'kg/m^3'}
 
 
 def _finite(text: str) -> float:
@@ -64,29 +66,22 @@ def _params(args) -> RodParams:
 
 def _add_profile(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group('angular-velocity profile (velocity drive)')
-    g.add_argument('--profile', choices=tuple(k for k in PROFILES if k != 'spin_up'),
-                   default='eq26')
-    g.add_argument('--omega', type=_finite, default=2.0,
-                   help='peak/constant/final angular velocity [rad/s] (default 2)')
-    g.add_argument('--period', type=_finite, default=15.0, help='Eq. 26 period T [s]')
-    g.add_argument('--ramp-time', type=_finite, default=15.0, help='ramp duration [s]')
-    g.add_argument('--t-step', type=_finite, default=0.0, help='time of the step [s]')
-    g.add_argument('--table', type=Path, help='CSV of time [s], omega [rad/s] (profile table)')
+    g.add_argument('--profile', choices=OPTION_PROFILES, default='eq26')
+    for o in PROFILE_OPTIONS:
+        flags = ['--' + o.name.replace('_', '-')]
+        if o.name == 'omega_max':
+            flags.append('--omega')
+        if o.name == 'table_file':
+            g.add_argument('--table', '--table-file', dest='table_file', type=Path,
+                           help=o.description)
+            continue
+        g.add_argument(*flags, dest=o.name, type=_finite, default=None, metavar=o.unit or 'X',
+                       help=f'{o.description} [{o.unit}] (default {o.default:g})')
 
 
 def _profile(args):
-    name = args.profile
-    if name == 'eq26':
-        return make_profile('eq26', period=args.period, omega_max=args.omega)
-    if name == 'constant':
-        return make_profile('constant', omega_value=args.omega)
-    if name == 'step':
-        return make_profile('step', omega_after=args.omega, t_step=args.t_step)
-    if name == 'ramp':
-        return make_profile('ramp', omega_max=args.omega, ramp_time=args.ramp_time)
-    if args.table is None:
-        raise ValueError('--profile table needs --table FILE')
-    return TableProfile.from_csv(args.table)
+    return profile_from_options(args.profile, {o.name: getattr(args, o.name)
+                                               for o in PROFILE_OPTIONS})
 
 
 def _initial(args) -> dict:
@@ -208,7 +203,7 @@ def cmd_demo(args) -> int:
             return 1
         return 0
     params = RodParams()
-    profile = make_profile('eq26', period=15.0, omega_max=2.0)
+    profile = Eq26Profile(period=15.0, omega_max=2.0)
     run = simulate(params, profile, 40.0, dt=1e-3)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

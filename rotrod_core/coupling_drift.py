@@ -3,7 +3,7 @@
 With no hub torque (Q = 0) and no damping, the energy E and the angular momentum L
 about the axis are invariants of the true motion. The exact (Lagrangian) coupling
 keeps them to rounding; the paper's Eq. 23 (plus the hub's J w') omits the relative
-angular momentum m ((r0 + u) v' - v u'), so both drift (MODEL.md measures 4.3 % and
+angular momentum m ((r0 + u) v' - v u'), so both drift (docs/model.md measures 4.3 % and
 2.2 % over 40 s for J = 0.01 kg m^2, w = 2 rad/s, u = 1 mm at the start).
 """
 
@@ -18,7 +18,7 @@ from .params import RodParams
 from .simulate import simulate
 
 DEFAULT_PARAMS = RodParams(hub_inertia=0.01)
-"""Table 1 with a light hub, J = 0.01 kg m^2 (MODEL.md's measurement)."""
+"""Table 1 with a light hub, J = 0.01 kg m^2 (docs/model.md's measurement)."""
 
 DEFAULT_INITIAL = {'omega': 2.0, 'u': 1e-3}
 """Start: w = 2 rad/s, u = 1 mm, everything else zero (SI units)."""

@@ -2,12 +2,16 @@
 
 For an isotropic undamped rod starting from rest, at constant w < w0:
 
-- quasi-static (slow spin-up): the deflection is u_s = w^2 r0 / (w0^2 - w^2), so
-  w_cr = w0 sqrt(delta / (delta + r0));
+- quasi-static (slow spin-up): the deflection is u_s = w^2 re / (w0^2 - w^2), so
+  w_cr = w0 sqrt(delta / (delta + re));
 - step (from rest in the rotating frame, Eq. 29): the peak approaches 2 u_s, so
-  w_cr = w0 sqrt(delta / (delta + 2 r0));
+  w_cr = w0 sqrt(delta / (delta + 2 re));
 - impulsive (the mass at rest in the inertial frame when w jumps): the peak
-  approaches r0 w / (w0 - w), so w_cr = w0 delta / (r0 + delta).
+  approaches re w / (w0 - w), so w_cr = w0 delta / (re + delta).
+
+Here w0 = sqrt(k/M) (:attr:`RodParams.natural_frequency`, with gravity's axial load
+and the rod's modal mass M) and re = (Me / M) r0 is the load radius (r0 for the
+paper's massless rod; see :mod:`rotrod_core.model`).
 """
 
 from __future__ import annotations
@@ -42,20 +46,39 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
     ``params.eccentricity`` and ``deflection_limit`` may be arrays (Fig. 10). The
     quasi-static form uses the radial stiffness k1; the others need an isotropic rod.
     """
+    _limit(deflection_limit)
+    if start not in STARTS:
+        raise ValueError(f'start must be one of {STARTS}, got {start!r}')
+    w0 = (params.natural_frequency_radial if start == 'quasi_static'
+          else params.natural_frequency)
+    # the load radius re = (Me / M) r0 (r0 exactly for a massless rod)
+    load_radius = params.eccentricity * (params.eccentric_mass / params.modal_mass)
+    return critical_speed_from(w0, load_radius, deflection_limit, start)
+
+
+def critical_speed_from(natural_frequency, eccentricity, deflection_limit,
+                        start: str = 'quasi_static'):
+    """The closed forms of :func:`critical_speed` from plain numbers (rad/s).
+
+    ``natural_frequency`` w0 in rad/s, ``eccentricity`` r0 in m (>= 0; the load radius
+    (Me / M) r0 for a rod with mass, which is what identification measures), the deflection
+    limit in m; arrays broadcast. Used with identified values
+    (:meth:`rotrod_core.RigEstimate.critical_speed`). NaN inputs give NaN.
+    """
     d = _limit(deflection_limit)
     if start not in STARTS:
         raise ValueError(f'start must be one of {STARTS}, got {start!r}')
-    r0 = np.asarray(params.eccentricity, dtype=float)
+    w0 = np.asarray(natural_frequency, dtype=float)
+    r0 = np.asarray(eccentricity, dtype=float)
     # d / (d + r0) as 1 / (1 + r0/d): d + r0 may overflow, r0/d = inf gives the limit 0
     with np.errstate(over='ignore'):
         ratio = r0 / d
         if start == 'quasi_static':
-            w0 = params.natural_frequency_radial
             w = w0 * np.sqrt(1.0 / (1.0 + ratio))
+        elif start == 'step':
+            w = w0 * np.sqrt(1.0 / (1.0 + 2 * ratio))
         else:
-            w0 = params.natural_frequency
-            w = (w0 * np.sqrt(1.0 / (1.0 + 2 * ratio)) if start == 'step'
-                 else w0 / (1.0 + ratio))
+            w = w0 / (1.0 + ratio)
     w = np.asarray(w, dtype=float)
     return float(w) if w.ndim == 0 else w
 
@@ -63,9 +86,10 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
 def step_response(params: RodParams, omega: float, t):
     """Eq. 29: deflection z = u + i v (m) from rest in the rotating frame at constant w.
 
-    z(t) = (w^2 r0 / (2 w0)) [(1 - exp(i w1 t)) / w1 + (1 - exp(-i w2 t)) / w2] with
+    z(t) = (w^2 re / (2 w0)) [(1 - exp(i w1 t)) / w1 + (1 - exp(-i w2 t)) / w2] with
     w1 = w0 - w, w2 = w0 + w, for an isotropic undamped rod and 0 < w < w0 (rad/s);
-    t in s (array). Its peak magnitude approaches 2 u_s.
+    t in s (array); re = (Me / M) r0 (r0 for a massless rod). Its peak magnitude
+    approaches 2 u_s.
     """
     if not params.is_isotropic or np.any(np.asarray(params.damping_ratio) > 0):
         raise ValueError('step_response (Eq. 29) needs an isotropic rod without damping')
@@ -75,7 +99,8 @@ def step_response(params: RodParams, omega: float, t):
         raise ValueError(f'step_response needs 0 < omega < w0 = {w0:.6f} rad/s, got {omega!r}')
     w1, w2 = w0 - w, w0 + w
     t = np.asarray(t, dtype=float)
-    return (w * w * params.eccentricity / (2 * w0)) * ((1 - np.exp(1j * w1 * t)) / w1
+    re = params.eccentricity * (params.eccentric_mass / params.modal_mass)
+    return (w * w * re / (2 * w0)) * ((1 - np.exp(1j * w1 * t)) / w1
                                                        + (1 - np.exp(-1j * w2 * t)) / w2)
 
 
@@ -120,7 +145,8 @@ def critical_speed_for_profile(params: RodParams, profile: Profile, deflection_l
         raise ValueError('only eccentricity may be an array here')
     r0 = np.asarray(params.eccentricity, dtype=float)
     unit = params.replace(eccentricity=1.0)
-    w0 = float(np.sqrt(min(unit.stiffness_radial, unit.stiffness_tangential) / unit.mass))
+    w0 = float(np.sqrt(min(unit.stiffness_radial, unit.stiffness_tangential)
+                       / unit.modal_mass))
     if t_end is None:
         t_end = (profile.end_time or 0.0) + 10 * 2 * math.pi / w0
     w_max = 1.5 * w0 if omega_search_max is None else float(omega_search_max)

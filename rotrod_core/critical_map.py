@@ -71,6 +71,6 @@ def critical_speed_map(params: RodParams, eccentricities, limits, profile: Profi
     speeds[label] = np.asarray(critical_speed_for_profile(grid, profile, d[:, None], dt=dt,
                                                           progress=progress))
     w0 = float(np.sqrt(min(np.min(params.stiffness_radial),
-                           np.min(params.stiffness_tangential)) / np.min(params.mass)))
+                           np.min(params.stiffness_tangential)) / np.min(params.modal_mass)))
     return CriticalSpeedMap(eccentricity=r0, limit=d, speeds=speeds, natural_frequency=w0,
                             numerical_step=dt)

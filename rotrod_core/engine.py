@@ -3,8 +3,12 @@
 :class:`SimulationEngine` is what a real-time front end (the ROS simulator node)
 drives: it owns a :class:`~rotrod_core.stepper.RealTimeStepper`, takes timestamped
 commands (angular-velocity setpoints or hub torques), advances in whole fixed steps
-on its own simulated clock, halts on a state beyond the deflection limit or a
-non-finite one (keeping the last good state), and reports its health.
+on its own simulated clock and reports its health. The paper's critical deflection
+(``deflection_limit``, 3 mm) is a criterion it reports (health ERROR while the tip is
+beyond it), not a wall: the simulation goes on. It halts, keeping the last good state,
+only where the model stops meaning anything: a non-finite state, a deflection beyond
+the small-deflection bound ``max_deflection_ratio`` x rod length, or |w| beyond the
+``max_omega`` the integration step was sized for.
 :class:`EngineConfig` holds everything that can be configured, validated as a whole
 so that a combination that makes no physical sense is refused with a reason.
 """
@@ -42,6 +46,30 @@ STEP_RESOLUTION = 0.5
 per radian of that mode ~ (dt |lambda|)^4 / 120, here below 0.06 %)."""
 
 
+MAX_DEFLECTION_RATIO = 0.1
+"""Default model-validity bound on |r| / l (tip deflection over rod length).
+
+The model is linear (small-deflection Euler-Bernoulli): it keeps the mass at the rod's
+height and the tip stiffness at 3 E I / l^3 whatever the deflection. On the static
+cantilever shape phi = (3 xi^2 - xi^3) / 2 a tip deflection delta shortens the rod's
+height by (1/2) integral of (delta phi')^2 dx = 0.6 delta^2 / l, so its relative
+foreshortening is 0.6 (delta / l)^2: 0.6 % at delta = 0.1 l (see
+:func:`foreshortening`), the order of the neglected geometric terms. Beyond that
+the linear model is no longer a small-deflection model; the simulation halts there."""
+
+FORESHORTENING_FACTOR = 0.6
+"""Height lost by a cantilever's tip per (deflection^2 / length), 1: integral over the
+static shape of (1/2) phi'(x)^2 dx times l, = 3/5."""
+
+
+def foreshortening(deflection_ratio):
+    """Relative drop of the tip's height, dz / l, at a tip deflection ``delta / l`` (1).
+
+    Second order in the deflection on the static cantilever shape: 0.6 (delta / l)^2.
+    """
+    return FORESHORTENING_FACTOR * np.square(deflection_ratio)
+
+
 TIMEOUT_DELAYS = 2.0
 """Shortest command_timeout, in units of setpoint_delay: the delay plus two stream
 intervals, since setpoint_delay is at least two intervals."""
@@ -72,14 +100,23 @@ class EngineConfig:
         physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
         max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
             The hub's angular acceleration bends the rod backwards: quasi-statically
-            v = -w' r0 m / k2 (0.68 mm per rad/s^2 for Table 1), up to twice that
-            when w' is applied suddenly. A bound whose quasi-static bending alone
-            exceeds ``deflection_limit`` is refused.
+            v = -w' r0 Me / k2 (Me = m for a massless rod; 0.68 mm per rad/s^2 for
+            Table 1), up to twice that when w' is applied suddenly. A bound whose
+            quasi-static bending alone exceeds the validity bound
+            (``max_deflection_ratio`` x l) is refused.
         max_omega: largest |w| accepted as a setpoint, and reached in torque drive
-            before the simulation halts, rad/s.
+            before the simulation halts, rad/s. The step is sized for it (see
+            ``physics_rate``), so beyond it the integration is not trusted.
         max_torque: largest |Q| accepted as a torque command, N m.
-        deflection_limit: |r| = sqrt(u^2 + v^2) beyond which the simulation halts, m.
+        deflection_limit: the critical deflection, m (the paper's 3 mm, the
+            criterion behind its critical speed): while |r| = sqrt(u^2 + v^2) is
+            beyond it, health is ERROR ("beyond the critical deflection"), naming
+            when the tip first crossed it and the peak so far; the simulation goes
+            on and accepts commands.
         warn_fraction: fraction of ``deflection_limit`` above which health is WARN.
+        max_deflection_ratio: model-validity bound on |r| / l: beyond it the
+            simulation halts at the last good state until a reset (0 = no bound).
+            Default :data:`MAX_DEFLECTION_RATIO` (0.1: 30 mm for Table 1).
         critical_margin: relative distance to a critical speed within which health
             is WARN (0.05 = within 5 %).
         setpoint_delay: lag of the shaped w behind the setpoint stream, s (at least
@@ -106,6 +143,7 @@ class EngineConfig:
     max_torque: float = 100.0
     deflection_limit: float = 0.003
     warn_fraction: float = 0.8
+    max_deflection_ratio: float = MAX_DEFLECTION_RATIO
     critical_margin: float = 0.05
     setpoint_delay: float = 0.05
     initial: tuple = ()
@@ -123,8 +161,11 @@ class EngineConfig:
         for name in ('physics_rate', 'max_angular_acceleration', 'max_omega', 'max_torque',
                      'deflection_limit', 'warn_fraction'):
             set_(self, name, finite_number(name, getattr(self, name), positive=True))
-        set_(self, 'critical_margin',
-             finite_number('critical_margin', self.critical_margin, nonnegative=True))
+        for name in ('critical_margin', 'max_deflection_ratio'):
+            set_(self, name, finite_number(name, getattr(self, name), nonnegative=True))
+        if self.max_deflection_ratio > 1:
+            raise ValueError(f'max_deflection_ratio must be in [0, 1] (|r| / rod length; '
+                             f'0 = no bound), got {self.max_deflection_ratio!r}')
         if self.warn_fraction > 1:
             raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
         if not 0 < finite_number('setpoint_delay', self.setpoint_delay) <= 10:
@@ -150,12 +191,16 @@ class EngineConfig:
                 f'{rate:.4g} rad/s, so RK4 needs physics_rate >= {needed:.4g} Hz '
                 f'(or a lower max_omega)')
         bend = tangential_bending(self.params, self.max_angular_acceleration)
-        if bend > self.deflection_limit:
+        if bend > self.max_deflection:
             raise ValueError(
                 f'max_angular_acceleration {self.max_angular_acceleration:g} rad/s^2 bends the '
-                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 m / k2), beyond '
-                f'the {self.deflection_limit * 1e3:.3g} mm deflection_limit: every ramp at '
-                'that rate would halt the simulation')
+                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 Me / k2), beyond '
+                f'the model\'s validity bound {self.max_deflection * 1e3:.3g} mm '
+                f'(max_deflection_ratio {self.max_deflection_ratio:g} x rod length): every '
+                'ramp at that rate would halt the simulation')
+        # the setpoint shaper's own limits (e.g. the largest change of w in a stall),
+        # refused here with its reason rather than when the engine starts
+        OmegaSetpointShaper(self.max_angular_acceleration, delay=self.setpoint_delay)
         try:
             initial = dict(self.initial)
         except (TypeError, ValueError):
@@ -169,9 +214,10 @@ class EngineConfig:
             raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
                              f'{self.max_omega:g} rad/s')
         r = math.hypot(state.u, state.v)
-        if r > self.deflection_limit:
-            raise ValueError(f'initial deflection {r:g} m exceeds deflection_limit '
-                             f'{self.deflection_limit:g} m')
+        if r > self.max_deflection:
+            raise ValueError(f'initial deflection {r:g} m exceeds the model\'s validity bound '
+                             f'{self.max_deflection:g} m (max_deflection_ratio '
+                             f'{self.max_deflection_ratio:g} x rod length)')
         co = model.Coefficients.from_params(self.params)
         if not (math.isfinite(model.energy(co, state))
                 and math.isfinite(model.angular_momentum(co, state))):
@@ -182,6 +228,13 @@ class EngineConfig:
     def dt(self) -> float:
         """Integration step, s."""
         return 1.0 / self.physics_rate
+
+    @property
+    def max_deflection(self) -> float:
+        """Validity bound on |r|, m: ``max_deflection_ratio`` x rod length (inf: none)."""
+        if not self.max_deflection_ratio:
+            return math.inf
+        return self.max_deflection_ratio * float(self.params.rod_length)
 
     @property
     def initial_state(self) -> State:
@@ -223,6 +276,7 @@ class SimulationEngine:
         self._steps = 0
         self._stepper = self._make_stepper(self.config, self.config.initial_state)
         self.halted: str | None = None
+        self._reset_watch()
         self.rejected_commands = 0
         self.accepted_commands = 0
         self.timeouts = 0
@@ -236,6 +290,20 @@ class SimulationEngine:
         stepper = RealTimeStepper(config.params, config.dt, config.coupling)
         stepper.set_state(**state._asdict())
         return stepper
+
+    def _reset_watch(self) -> None:
+        """Forget crossings of the critical deflection and the peak (start and reset)."""
+        self.peak_deflection = self.deflection
+        """Largest |r| since the start or the last reset, m."""
+        self.peak_deflection_at = self.time
+        """Simulated time of :attr:`peak_deflection`, s."""
+        self.first_crossed_at: float | None = None
+        """When |r| first went beyond ``deflection_limit`` since the start or reset, s."""
+        self.beyond_limit_since: float | None = None
+        """Start of the current excursion beyond ``deflection_limit`` (None: within), s."""
+        self.limit_crossings = 0
+        """Excursions beyond ``deflection_limit`` since the start or the last reset."""
+        self._watch_deflection(self.deflection)
 
     def _reset_commands(self) -> None:
         cfg = self.config
@@ -433,9 +501,11 @@ class SimulationEngine:
             return False
         r = math.hypot(state.u, state.v)
         problem = None
-        if r > cfg.deflection_limit:
-            problem = (f'deflection {r * 1e3:.4g} mm beyond the limit '
-                       f'{cfg.deflection_limit * 1e3:.4g} mm at t = {t0 + dt:.4f} s')
+        if r > cfg.max_deflection:
+            problem = (f'deflection {r * 1e3:.4g} mm beyond the model\'s validity bound '
+                       f'{cfg.max_deflection * 1e3:.4g} mm (max_deflection_ratio '
+                       f'{cfg.max_deflection_ratio:g} x rod length; small-deflection model) '
+                       f'at t = {t0 + dt:.4f} s')
         elif abs(state.omega) > cfg.max_omega:
             problem = (f'|omega| {abs(state.omega):.4g} rad/s beyond max_omega '
                        f'{cfg.max_omega:.4g} rad/s at t = {t0 + dt:.4f} s')
@@ -444,11 +514,25 @@ class SimulationEngine:
             self.halted = problem + '; halted at the last good state'
             return False
         self._steps += 1
+        self._watch_deflection(r)
         self._torque = stepper.torque
         self._omega_dot = stepper.omega_dot
         if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
             self._shaper.forget_before(self.time)
         return True
+
+    def _watch_deflection(self, r: float) -> None:
+        """Follow the critical-deflection criterion: crossings, and the peak so far."""
+        if r > self.peak_deflection:
+            self.peak_deflection, self.peak_deflection_at = r, self.time
+        if r > self.config.deflection_limit:
+            if self.beyond_limit_since is None:
+                self.beyond_limit_since = self.time
+                self.limit_crossings += 1
+                if self.first_crossed_at is None:
+                    self.first_crossed_at = self.time
+        else:
+            self.beyond_limit_since = None
 
     def advance(self, steps: int) -> int:
         """Take up to ``steps`` steps (fewer if halted); return how many were taken."""
@@ -476,6 +560,7 @@ class SimulationEngine:
         self._stepper.set_state(**self.config.initial_state._asdict())
         self.halted = None
         self._reset_commands()
+        self._reset_watch()
 
     def reconfigure(self, config: EngineConfig) -> None:
         """Switch to ``config`` (already validated), keeping the state and the clock.
@@ -484,7 +569,9 @@ class SimulationEngine:
         drive holds the current w, torque drive starts with zero torque. A change of
         drive, ``max_angular_acceleration``, ``setpoint_delay`` or ``command_timeout``
         restarts the command timeout and ends a timeout event in course (velocity
-        drive then holds the w reached; torque drive keeps zero torque).
+        drive then holds the w reached; torque drive keeps zero torque). A new
+        ``deflection_limit`` judges the current deflection against it at once; a
+        validity bound below the current deflection halts the next step.
         """
         if not isinstance(config, EngineConfig):
             raise ValueError(f'config must be an EngineConfig, got {config!r}')
@@ -502,6 +589,8 @@ class SimulationEngine:
             if self.timed_out_at is not None and config.drive == 'velocity':
                 self._shaper.ramp_to(self._shaper.omega(time), time)    # hold w here
             self._restart_timer()
+        if config.deflection_limit != old.deflection_limit:
+            self._watch_deflection(self.deflection)     # an excursion is judged anew
         self._cache_limits()
 
     # ----------------------------------------------------------------- health
@@ -519,9 +608,11 @@ class SimulationEngine:
     def health(self) -> Health:
         """The session's health level and its reason.
 
-        ERROR when halted; WARN when the deflection is above ``warn_fraction`` of the
-        limit, |w| is near a critical speed, w is in an unstable range, or the command
-        timeout has run out (until a command comes); else OK.
+        ERROR when halted, or while the deflection is beyond ``deflection_limit`` (the
+        critical deflection: the simulation goes on); WARN when the deflection is
+        above ``warn_fraction`` of it, |w| is near a critical speed, w is in an
+        unstable range, or the command timeout has run out (until a command comes);
+        else OK. Whatever the level, every other reason is in the message too.
         """
         cfg, s = self.config, self.state
         r = self.deflection
@@ -534,10 +625,23 @@ class SimulationEngine:
                   ('accepted_commands', self.accepted_commands),
                   ('rejected_commands', self.rejected_commands),
                   ('command_timeout_s', cfg.command_timeout),
-                  ('command_age_s', self.command_age), ('command_timeouts', self.timeouts))
+                  ('command_age_s', self.command_age), ('command_timeouts', self.timeouts),
+                  ('peak_deflection_m', self.peak_deflection),
+                  ('peak_deflection_time_s', self.peak_deflection_at),
+                  ('critical_deflection_first_crossed_s',
+                   'never' if self.first_crossed_at is None else self.first_crossed_at),
+                  ('critical_deflection_crossings', self.limit_crossings),
+                  ('max_deflection_m', cfg.max_deflection))
         if self.halted:
             return Health(ERROR, self.halted, values)
-        warnings = []
+        errors, warnings = [], []
+        if self.beyond_limit_since is not None:
+            errors.append(
+                f'deflection {r * 1e3:.4g} mm beyond the critical deflection '
+                f'{cfg.deflection_limit * 1e3:.4g} mm (deflection_limit) since '
+                f't = {self.beyond_limit_since:.3f} s; first crossed at '
+                f't = {self.first_crossed_at:.3f} s, peak {self.peak_deflection * 1e3:.4g} mm '
+                f'at t = {self.peak_deflection_at:.3f} s; still running')
         if self.timed_out_at is not None:
             if cfg.drive == 'torque':
                 action = 'hub torque 0, coasting'
@@ -547,7 +651,7 @@ class SimulationEngine:
                 action = 'spun down, at rest'
             warnings.append(f'no command for {self.command_age:.3g} s (command_timeout '
                             f'{cfg.command_timeout:g} s): {action}')
-        if r > cfg.warn_fraction * cfg.deflection_limit:
+        if r > cfg.warn_fraction * cfg.deflection_limit and not errors:
             warnings.append(f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
                             f'the {cfg.deflection_limit * 1e3:.3g} mm limit')
         for name, wc in self.critical_speeds.items():
@@ -558,10 +662,13 @@ class SimulationEngine:
         if not self.stable_at(s.omega):
             warnings.append(f'omega {s.omega:.4g} rad/s is in an unstable range: '
                             'the free vibration grows')
+        if errors:
+            return Health(ERROR, '; '.join(errors + warnings), values)
         if warnings:
             return Health(WARN, '; '.join(warnings), values)
         return Health(OK, 'running', values)
 
 
-__all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health', 'OK',
+__all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health',
+           'MAX_DEFLECTION_RATIO', 'OK', 'foreshortening',
            'STATE_FIELDS', 'SimulationEngine', 'WARN', 'fastest_rate']

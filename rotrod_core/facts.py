@@ -4,7 +4,7 @@ Liu et al. (2014) state, in words and figures, what the Eq. 26 run (Table 1) sho
 stage, how the dynamic frequencies move with speed (Eq. 28, Fig. 9), how the critical
 speed falls with eccentricity (Fig. 10, 3.0 mm limit) and give a torque equation
 (Eq. 23). Each :class:`Fact` holds the paper's claim, the paper's number where it gives
-one, the closed form of MODEL.md where there is one, the value measured now (from
+one, the closed form of docs/model.md where there is one, the value measured now (from
 :func:`~rotrod_core.simulate.simulate`, the eigen analysis and the fits of
 :mod:`~rotrod_core.trajectory_fit`; never typed in) and a verdict decided by a stated
 criterion. SI units inside; the text shows mm, um, Hz and rad/s as labelled.
@@ -80,7 +80,7 @@ class Fact:
         where: where the paper says it (figure, equation, section).
         claim: what the paper says (quoted or closely paraphrased).
         paper_value: the paper's number or sign, '-' when it gives none.
-        closed_form: the MODEL.md closed form evaluated for Table 1, '-' if none.
+        closed_form: the docs/model.md closed form evaluated for Table 1, '-' if none.
         measured: the value measured now, as text with units.
         verdict: 'agrees', 'differs' or 'agrees in part'.
         criterion: how the verdict was decided.
@@ -306,7 +306,7 @@ def stage_facts(run: SimulationResult, params: RodParams = TABLE1) -> list:
         paper_value='~10^3', closed_form='-',
         measured=f'max u / max |v| = {hold.u_max / v_amp:.0f} (10^{orders:.2f})',
         verdict=AGREES if hold.u_max / v_amp >= 1e3 else DIFFERS,
-        criterion='three or more orders of magnitude (ratio >= 10^3), as MODEL.md reads '
+        criterion='three or more orders of magnitude (ratio >= 10^3), as docs/model.md reads '
                   'the claim',
         values={'ratio': hold.u_max / v_amp}))
 

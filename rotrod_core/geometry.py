@@ -1,8 +1,11 @@
 """Where the parts are in space: the deflected rod's centreline, for drawing.
 
-The rod is massless and loaded only at its tip, so its deflected shape is the
+The paper's rod is massless and loaded only at its tip, so its deflected shape is the
 Euler-Bernoulli cantilever under a tip force: along the rod (height z from the root,
-0 <= z <= l) the deflection is the tip's times s^2 (3 - s) / 2, s = z / l.
+0 <= z <= l) the deflection is the tip's times s^2 (3 - s) / 2, s = z / l. The same
+shape is the assumed mode of the one-mode model of a rod with mass
+(``docs/real_rig.md``); under an axial load (gravity) the true static shape differs
+slightly from it, which a drawing does not show.
 """
 
 from __future__ import annotations

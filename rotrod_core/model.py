@@ -1,22 +1,33 @@
 """Equations of motion of the tip mass on a rod on a rotating hub (rotating frame).
 
-The single source of truth for the dynamics (see MODEL.md). State
+The single source of truth for the dynamics (see docs/model.md). State
 ``(u, v, du, dv, theta, omega)``: deflection u (radial, e1) and v (tangential, e2) of
 the mass in m, their rates in m/s, hub angle theta in rad and angular velocity omega
 in rad/s. Every function is plain arithmetic, so it accepts Python floats (fast, for
 the real-time stepper) and numpy arrays (batches, vectorized over time) alike.
 
-Deflection equations (Eqs. 16, 17, generalised to k1 != k2 and rotating damping)::
+Deflection equations (Eqs. 16, 17, generalised to k1 != k2, rotating damping and a
+rod with mass)::
 
-    u'' = 2 w v' + (w^2 - k1/m) u + w^2 r0 + w' v - (c1/m) u'
-    v'' = -2 w u' + (w^2 - k2/m) v - w' (r0 + u) - (c2/m) v'
+    u'' = 2 w v' + (w^2 - k1/M) u + w^2 re + w' v - (c1/M) u'
+    v'' = -2 w u' + (w^2 - k2/M) v - w' (re + u) - (c2/M) v'
 
 Hub (torque) equation, exact Lagrangian coupling, after eliminating u'' and v''::
 
-    J w' = Q + tau_rod,   tau_rod = v (k2 (r0 + u) - k1 u) + c2 (r0 + u) v' - c1 v u'
+    Je w' = Q + tau_rod,   tau_rod = v (k2 (re + u) - k1 u) + c2 (re + u) v' - c1 v u'
 
 tau_rod is the moment about the axis that the rod exerts on the hub. The paper's
-Eq. 23 (plus J w') instead reads ``(J + m rho^2) w' = Q - 2 m w ((r0 + u) u' + v v')``.
+Eq. 23 (plus J w') instead reads ``(Je + M rho^2) w' = Q - 2 M w ((re + u) u' + v v')``
+with rho^2 = (re + u)^2 + v^2.
+
+For the paper's massless rod M = m, re = r0 and Je = J. A rod with mass (one-mode
+Rayleigh-Ritz on the static cantilever shape, ``docs/real_rig.md#lagrangian``) has the
+modal mass M = m + (33/140) rho A l, the eccentric mass Me = m + (3/8) rho A l, the
+load radius re = (Me / M) r0 and the effective hub inertia
+Je = J + r0^2 (m + rho A l - Me^2 / M): its kinetic energy is exactly that of a point
+mass M at radius re on a hub of inertia Je (``docs/real_rig.md#equivalence``), so the
+equations keep the paper's form with these coefficients. The stiffnesses k1, k2
+include the axial load of gravity (:attr:`RodParams.stiffness_radial`).
 """
 
 from __future__ import annotations
@@ -80,33 +91,55 @@ def make_state(initial: dict | None = None, *, scalar: bool = False, **defaults)
 
 @dataclass(frozen=True)
 class Coefficients:
-    """Per-unit-mass coefficients of the equations, taken from :class:`RodParams`.
+    """Coefficients of the equations, taken from :class:`RodParams`.
 
-    Plain floats for a single system, arrays for a batch.
+    Plain floats for a single system, arrays for a batch. The equations use the
+    modal mass M, the load radius re and the effective hub inertia Je (module
+    docstring); for the paper's massless rod these are m, r0 and J exactly.
     """
 
     mass: float
-    """m, kg."""
+    """Tip mass m, kg."""
     eccentricity: float
-    """r0, m."""
+    """r0 (the rod root's radius: where the undeflected mass stands), m."""
     hub_inertia: float
-    """J, kg m^2."""
+    """J, kg m^2 (the hub alone)."""
     k1: float
-    """Radial tip stiffness, N/m."""
+    """Radial tip stiffness (with the axial load of gravity), N/m."""
     k2: float
-    """Tangential tip stiffness, N/m."""
+    """Tangential tip stiffness (with the axial load of gravity), N/m."""
     c1: float
     """Radial damping coefficient, N s/m."""
     c2: float
     """Tangential damping coefficient, N s/m."""
     w1sq: float
-    """k1/m, 1/s^2."""
+    """k1/M, 1/s^2."""
     w2sq: float
-    """k2/m, 1/s^2."""
+    """k2/M, 1/s^2."""
     g1: float
-    """c1/m, 1/s."""
+    """c1/M, 1/s."""
     g2: float
-    """c2/m, 1/s."""
+    """c2/M, 1/s."""
+    modal_mass: float = None
+    """M = m + (33/140) rho A l, kg (m for a massless rod)."""
+    eccentric_mass: float = None
+    """Me = m + (3/8) rho A l, kg (m for a massless rod)."""
+    load_radius: float = None
+    """re = (Me / M) r0, m: where a point mass M would feel the same eccentric loads."""
+    rotor_inertia: float = None
+    """Je = J + r0^2 (m + rho A l - Me^2 / M) >= J, kg m^2."""
+
+    def __post_init__(self):
+        # a massless rod unless told otherwise (M = m, re = r0, Je = J)
+        set_ = object.__setattr__
+        if self.modal_mass is None:
+            set_(self, 'modal_mass', self.mass)
+        if self.eccentric_mass is None:
+            set_(self, 'eccentric_mass', self.mass)
+        if self.load_radius is None:
+            set_(self, 'load_radius', self.eccentricity)
+        if self.rotor_inertia is None:
+            set_(self, 'rotor_inertia', self.hub_inertia)
 
     @classmethod
     def from_params(cls, params: RodParams) -> Coefficients:
@@ -115,51 +148,64 @@ class Coefficients:
             arr = np.asarray(x, dtype=float)
             return float(arr) if arr.ndim == 0 else arr
 
-        m = num(params.mass)
+        m, mm, me = num(params.mass), num(params.modal_mass), num(params.eccentric_mass)
+        rod = num(params.rod_mass)
+        r0, hub = num(params.eccentricity), num(params.hub_inertia)
         k1, k2 = num(params.stiffness_radial), num(params.stiffness_tangential)
         c1, c2 = num(params.damping_radial), num(params.damping_tangential)
-        return cls(mass=m, eccentricity=num(params.eccentricity),
-                   hub_inertia=num(params.hub_inertia), k1=k1, k2=k2, c1=c1, c2=c2,
-                   w1sq=k1 / m, w2sq=k2 / m, g1=c1 / m, g2=c2 / m)
+        # m + rho A l - Me^2 / M = rod (17/35 m + 213/2240 rod) / M: exactly 0 without
+        # a rod, >= 0 always (Cauchy-Schwarz on the shape integrals)
+        extra = rod * (17.0 / 35.0 * m + 213.0 / 2240.0 * rod) / mm
+        return cls(mass=m, eccentricity=r0, hub_inertia=hub, k1=k1, k2=k2, c1=c1, c2=c2,
+                   w1sq=k1 / mm, w2sq=k2 / mm, g1=c1 / mm, g2=c2 / mm, modal_mass=mm,
+                   eccentric_mass=me, load_radius=r0 * (me / mm),
+                   rotor_inertia=hub + extra * r0 * r0)
 
 
 def deflection_accelerations(co: Coefficients, u, v, du, dv, omega, omega_dot):
     """Accelerations (u'', v'') of the mass in the rotating frame, m/s^2.
 
     Eqs. 16 and 17 of the paper (with the sign of the tangential initial force as
-    derived in MODEL.md), with radial/tangential stiffness k1, k2 and rotating damping.
+    derived in docs/model.md), with radial/tangential stiffness k1, k2, rotating damping
+    and the rod's mass (modal mass M, load radius re; module docstring).
     ``omega`` and ``omega_dot`` (rad/s, rad/s^2) are the hub's at this instant.
     """
     w2 = omega * omega
-    ddu = 2.0 * omega * dv + (w2 - co.w1sq) * u + w2 * co.eccentricity + omega_dot * v - co.g1 * du
-    ddv = -2.0 * omega * du + (w2 - co.w2sq) * v - omega_dot * (co.eccentricity + u) - co.g2 * dv
+    re = co.load_radius
+    ddu = 2.0 * omega * dv + (w2 - co.w1sq) * u + w2 * re + omega_dot * v - co.g1 * du
+    ddv = -2.0 * omega * du + (w2 - co.w2sq) * v - omega_dot * (re + u) - co.g2 * dv
     return ddu, ddv
 
 
 def rod_torque_on_hub(co: Coefficients, u, v, du, dv):
     """Moment about the axis that the rod exerts on the hub, N m (exact coupling).
 
-    The tip force of the bent rod (k1 u + c1 u', k2 v + c2 v') acts on the rod at the
-    mass, at (r0 + u, v) from the axis, and reaches the hub through the massless rod.
+    For a massless rod: the tip force of the bent rod (k1 u + c1 u', k2 v + c2 v')
+    acts on the rod at the mass, at (r0 + u, v) from the axis, and reaches the hub
+    through the rod. With the rod's mass the same form holds at the load radius re
+    (what remains of the rod's inertia is in the effective hub inertia Je).
     """
-    x = co.eccentricity + u
+    x = co.load_radius + u
     return v * (co.k2 * x - co.k1 * u) + co.c2 * x * dv - co.c1 * v * du
 
 
 def hub_angular_acceleration(co: Coefficients, state, torque, coupling: str = 'exact'):
     """Hub angular acceleration w' (rad/s^2) under the hub torque ``torque`` (N m).
 
-    ``coupling='exact'``: the Lagrangian torque equation, J w' = Q + tau_rod; needs
-    J > 0 (the 3x3 system's determinant is m^2 J). ``coupling='paper'``: Eq. 23 as
-    printed plus the hub's J w', (J + m rho^2) w' = Q - 2 m w ((r0 + u) u' + v v').
+    ``coupling='exact'``: the Lagrangian torque equation, Je w' = Q + tau_rod; needs
+    J > 0 (the 3x3 system's determinant is M^2 Je). ``coupling='paper'``: Eq. 23 as
+    printed plus the hub's J w', (Je + M rho^2) w' = Q - 2 M w ((re + u) u' + v v'),
+    rho^2 = (re + u)^2 + v^2 (Je + M rho^2 is the rigid moment of inertia of hub, rod
+    and mass in the deflected shape).
     """
     u, v, du, dv, _, omega = state
     if coupling == 'exact':
-        return (torque + rod_torque_on_hub(co, u, v, du, dv)) / co.hub_inertia
+        return (torque + rod_torque_on_hub(co, u, v, du, dv)) / co.rotor_inertia
     if coupling == 'paper':
-        x = co.eccentricity + u
-        inertia = co.hub_inertia + co.mass * (x * x + v * v)
-        return (torque - 2.0 * co.mass * omega * (x * du + v * dv)) / inertia
+        x = co.load_radius + u
+        mm = co.modal_mass
+        inertia = co.rotor_inertia + mm * (x * x + v * v)
+        return (torque - 2.0 * mm * omega * (x * du + v * dv)) / inertia
     raise ValueError(f'coupling must be one of {COUPLINGS}, got {coupling!r}')
 
 
@@ -170,11 +216,12 @@ def hub_torque(co: Coefficients, state, omega_dot, coupling: str = 'exact'):
     """
     u, v, du, dv, _, omega = state
     if coupling == 'exact':
-        return co.hub_inertia * omega_dot - rod_torque_on_hub(co, u, v, du, dv)
+        return co.rotor_inertia * omega_dot - rod_torque_on_hub(co, u, v, du, dv)
     if coupling == 'paper':
-        x = co.eccentricity + u
-        return ((co.hub_inertia + co.mass * (x * x + v * v)) * omega_dot
-                + 2.0 * co.mass * omega * (x * du + v * dv))
+        x = co.load_radius + u
+        mm = co.modal_mass
+        return ((co.rotor_inertia + mm * (x * x + v * v)) * omega_dot
+                + 2.0 * mm * omega * (x * du + v * dv))
     raise ValueError(f'coupling must be one of {COUPLINGS}, got {coupling!r}')
 
 
@@ -194,25 +241,31 @@ def torque_drive_rates(co: Coefficients, state, torque, coupling: str = 'exact')
 def energy(co: Coefficients, state):
     """Total mechanical energy T + V of mass, rod and hub, J.
 
-    T = m/2 [(u' - w v)^2 + (v' + w (r0 + u))^2] + J w^2 / 2, V = (k1 u^2 + k2 v^2) / 2.
+    T = M/2 [(u' - w v)^2 + (v' + w (re + u))^2] + Je w^2 / 2, exactly the kinetic
+    energy of hub, tip mass and rod (for a massless rod M = m, re = r0, Je = J).
+    V = (k1 u^2 + k2 v^2) / 2: the elastic energy together with the potential of
+    gravity in its linearised (geometric-stiffness) form, which k1, k2 include.
     Its rate is dE/dt = Q w - c1 u'^2 - c2 v'^2.
     """
     u, v, du, dv, _, omega = state
     vx = du - omega * v
-    vy = dv + omega * (co.eccentricity + u)
-    return (0.5 * co.mass * (vx * vx + vy * vy) + 0.5 * co.hub_inertia * omega * omega
+    vy = dv + omega * (co.load_radius + u)
+    return (0.5 * co.modal_mass * (vx * vx + vy * vy) + 0.5 * co.rotor_inertia * omega * omega
             + 0.5 * (co.k1 * u * u + co.k2 * v * v))
 
 
 def angular_momentum(co: Coefficients, state):
-    """Angular momentum of hub and mass about the rotation axis, kg m^2/s.
+    """Angular momentum of hub, rod and mass about the rotation axis, kg m^2/s.
 
-    L = (J + m rho^2) w + m ((r0 + u) v' - v u'), rho^2 = (r0 + u)^2 + v^2; dL/dt = Q.
+    L = (Je + M rho^2) w + M ((re + u) v' - v u'), rho^2 = (re + u)^2 + v^2; dL/dt = Q.
+    (For a massless rod M = m, re = r0, Je = J. With the rod: Je + M rho^2 =
+    J + (m + rho A l) r0^2 + 2 Me r0 u + M (u^2 + v^2) and M (re + u) = Me r0 + M u.)
     """
     u, v, du, dv, _, omega = state
-    x = co.eccentricity + u
-    return ((co.hub_inertia + co.mass * (x * x + v * v)) * omega
-            + co.mass * (x * dv - v * du))
+    x = co.load_radius + u
+    mm = co.modal_mass
+    return ((co.rotor_inertia + mm * (x * x + v * v)) * omega
+            + mm * (x * dv - v * du))
 
 
 def inertial_position(co: Coefficients, u, v, theta):
@@ -227,11 +280,13 @@ def omega_jump(co: Coefficients, state, omega_new) -> State:
 
     The mass keeps its absolute velocity (a finite rod force cannot change it in no
     time), so its velocity relative to the rotating frame changes by
-    -(omega_new - omega) e3 x ((r0 + u) e1 + v e2).
+    -(omega_new - omega) e3 x ((r0 + u) e1 + v e2). With the rod's mass it is the
+    deflection's generalised momenta M (u' - w v), M (v' + w (re + u)) that are kept
+    (the impulse acts on the hub's angle only): the same with re for r0.
     """
     u, v, du, dv, theta, omega = state
     dw = omega_new - omega
-    return State(u, v, du + dw * v, dv - dw * (co.eccentricity + u), theta, omega_new)
+    return State(u, v, du + dw * v, dv - dw * (co.load_radius + u), theta, omega_new)
 
 
 def rotating_frame_matrix(co: Coefficients, omega, omega_dot):
@@ -261,5 +316,5 @@ def omega_jump_matrix(co: Coefficients, delta_omega):
     J = np.eye(5)
     J[2, 1] = delta_omega
     J[3, 0] = -delta_omega
-    J[3, 4] = -delta_omega * co.eccentricity
+    J[3, 4] = -delta_omega * co.load_radius
     return J

@@ -238,7 +238,7 @@ class StepProfile(Profile):
     w = omega_before for t < t_step, omega for t >= t_step. With t_step > 0 the jump
     is applied physically (the mass keeps its absolute velocity: from rest this is the
     "impulsive" start). With t_step = 0 the run starts in the frame already turning
-    at ``omega`` (from rest in that frame: the "step" start of MODEL.md).
+    at ``omega`` (from rest in that frame: the "step" start of docs/model.md).
 
     Attributes:
         omega_after: w after the step, rad/s.
@@ -725,6 +725,67 @@ PROFILES = {
     'table': TableProfile,
     'spin_up': SpinUpProfile,
 }
+
+
+@dataclass(frozen=True)
+class ProfileOption:
+    """One setting of the named profiles, shared by the CLI and the profile publisher."""
+
+    name: str
+    default: Any
+    unit: str
+    description: str
+    low: float | None = None
+    high: float | None = None
+
+
+PROFILE_OPTIONS = (
+    ProfileOption('period', 15.0, 's', 'eq26: stage length T', 0.0, 1e6),
+    ProfileOption('omega_max', 2.0, 'rad/s', 'eq26 and ramp: top speed; constant: the '
+                  'speed; step: the speed after the step', -1e4, 1e4),
+    ProfileOption('omega_before', 0.0, 'rad/s', 'step: the speed before the step',
+                  -1e4, 1e4),
+    ProfileOption('t_step', 1.0, 's', 'step: time of the step', 0.0, 1e6),
+    ProfileOption('ramp_time', 15.0, 's', 'ramp: duration of the ramp', 0.0, 1e6),
+    ProfileOption('t_start', 0.0, 's', 'ramp: start of the ramp', 0.0, 1e6),
+    ProfileOption('amplitude', 0.2, 'rad/s', 'sine_sweep: amplitude of w', -1e4, 1e4),
+    ProfileOption('f_start', 0.5, 'Hz', 'sine_sweep: frequency at the start', 0.0, 1e4),
+    ProfileOption('f_end', 4.0, 'Hz', 'sine_sweep: frequency at the end', 0.0, 1e4),
+    ProfileOption('sweep_time', 30.0, 's', 'sine_sweep: duration of the sweep', 0.0, 1e6),
+    ProfileOption('offset', 0.0, 'rad/s', 'sine_sweep: mean speed', -1e4, 1e4),
+    ProfileOption('table_file', '', '', 'table: CSV file of (time s, omega rad/s) rows'),
+)
+"""The settings of :func:`profile_from_options`, one naming for the CLI and the nodes."""
+
+
+OPTION_PROFILES = ('eq26', 'constant', 'step', 'ramp', 'sine_sweep', 'table')
+"""The profiles :func:`profile_from_options` builds from options (a planned spin-up is
+made by :func:`rotrod_core.plan_spin_up`, ``rotrod plan``)."""
+
+
+def profile_from_options(name: str, options: dict) -> Profile:
+    """The profile ``name`` built from :data:`PROFILE_OPTIONS` values (missing: default).
+
+    Raises ValueError with the reason (unknown name, bad values, no table file).
+    """
+    o = {opt.name: opt.default for opt in PROFILE_OPTIONS}
+    o.update({k: v for k, v in options.items() if v is not None})
+    if name == 'eq26':
+        return Eq26Profile(period=o['period'], omega_max=o['omega_max'])
+    if name == 'constant':
+        return ConstantProfile(o['omega_max'])
+    if name == 'step':
+        return StepProfile(o['omega_max'], t_step=o['t_step'], omega_before=o['omega_before'])
+    if name == 'ramp':
+        return RampProfile(o['omega_max'], o['ramp_time'], t_start=o['t_start'])
+    if name == 'sine_sweep':
+        return SineSweepProfile(o['amplitude'], o['f_start'], o['f_end'],
+                                duration=o['sweep_time'], offset=o['offset'])
+    if name == 'table':
+        if not o['table_file']:
+            raise ValueError('profile table needs a table file (table_file, --table)')
+        return TableProfile.from_csv(o['table_file'])
+    raise ValueError(f'profile must be one of {", ".join(OPTION_PROFILES)}; got {name!r}')
 
 
 def make_profile(name: str, **kwargs: Any) -> Profile:

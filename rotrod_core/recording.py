@@ -20,6 +20,7 @@ them one by one costs ~40 us each in rerun-sdk 0.41, columns ~0.1 us.
 
 from __future__ import annotations
 
+import math
 import uuid
 from pathlib import Path
 
@@ -79,10 +80,22 @@ class RecordingWriter:
     holds everything flushed: :func:`read_series` (``RrdReader(path).stream()``) reads
     it, ``rerun rrd verify`` refuses it, and ``rerun rrd optimize FILE -o COPY`` writes
     a complete copy.
+
+    With ``pretrigger`` (s), the writer starts armed, as an oscilloscope: it keeps
+    only the last ``pretrigger`` seconds of stamp time and writes nothing until
+    :meth:`trigger`; from then on it records everything, that prefix first. So a
+    recording can begin just before something happens (a commanded profile) rather
+    than when the logger started.
     """
 
     def __init__(self, path: str | Path, *, application_id: str = 'rotrod',
-                 serve_port: int | None = None):
+                 serve_port: int | None = None, pretrigger: float | None = None):
+        if pretrigger is not None and not (math.isfinite(pretrigger) and pretrigger >= 0):
+            raise ValueError(f'pretrigger must be a finite number of seconds >= 0, got '
+                             f'{pretrigger!r}')
+        self.pretrigger = pretrigger
+        self.armed = pretrigger is not None
+        """Waiting for :meth:`trigger`: nothing older than ``pretrigger`` is kept."""
         import rerun as rr
         self._rr = rr
         self.path = Path(path)
@@ -118,7 +131,18 @@ class RecordingWriter:
         """Hub angular velocity (rad/s) and torque (N m) at stamp time ``t`` (s)."""
         self._add(OMEGA, t, omega)
         self._add(TORQUE, t, torque)
-        self.samples += 1
+
+    def trigger(self) -> None:
+        """Start recording (armed writers): the kept pretrigger seconds are written first."""
+        if self.armed:
+            self._trim()
+        self.armed = False
+
+    def _trim(self) -> None:
+        """Drop what is older than ``pretrigger`` before the latest stamp (armed)."""
+        oldest = self.last_time - self.pretrigger if self.last_time is not None else 0.0
+        for rows in self._buffers.values():
+            rows[:] = [r for r in rows if r[0] >= oldest]
 
     def add_deflection(self, t: float, u: float, v: float) -> None:
         """Tip deflection (m) in the rotating frame at stamp time ``t`` (s)."""
@@ -148,10 +172,15 @@ class RecordingWriter:
             self.rec.flush(timeout_sec=timeout)
 
     def _send(self) -> None:
+        if self.armed:
+            self._trim()
+            return
         rr = self._rr
         for entity, rows in self._buffers.items():
             if not rows:
                 continue
+            if entity == OMEGA:
+                self.samples += len(rows)
             t = np.array([r[0] for r in rows])
             values = np.array([r[1] for r in rows], dtype=float)
             kind = 'timestamp' if self.epoch_time else 'duration'

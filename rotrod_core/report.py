@@ -38,7 +38,7 @@ def _speed(w: float) -> str:
 
 def fact_table(facts: list) -> str:
     """The fact table: where, claim, paper's number, closed form, measured, verdict."""
-    header = ['#', 'where', 'the paper says', "paper's number", 'closed form (MODEL.md)',
+    header = ['#', 'where', 'the paper says', "paper's number", 'closed form (docs/model.md)',
               'measured now', 'verdict']
     rows = [[i, f.where, f.claim, f.paper_value, f.closed_form, f.measured, f'**{f.verdict}**']
             for i, f in enumerate(facts, 1)]
@@ -120,9 +120,33 @@ def figure_list(figures: list) -> str:
     return '\n\n'.join(f'![{caption}]({name})\n\n*{caption}*' for name, caption in figures)
 
 
+def real_rig_table(summaries: list, limit: float) -> str:
+    """The paper's idealisation beside the real rig (:mod:`rotrod_core.rig_comparison`)."""
+    def mode(w):
+        return 'none (massless rod)' if not np.isfinite(w) else f'{w:.2f}'
+    rows = [
+        ('gravity g [m/s^2]', *(f'{s.params.gravity:g}' for s in summaries)),
+        ('rod density [kg/m^3]', *(f'{s.params.rod_density:g}' for s in summaries)),
+        ('tip load / buckling load', *(f'{100 * s.buckling_fraction:.1f} %'
+                                       for s in summaries)),
+        ('lateral tip stiffness k [N/m]', *(f'{s.stiffness:.4f}' for s in summaries)),
+        ('natural frequency w0 [rad/s]', *(f'{s.natural_frequency:.4f}' for s in summaries)),
+        ('next bending mode [rad/s]', *(mode(s.second_mode) for s in summaries)),
+        (f'quasi-static critical speed, {MM * limit:.1f} mm [rad/s]',
+         *(f'{s.critical_speed:.4f}' for s in summaries)),
+        ('Eq. 26 run: peak deflection |r| [mm]',
+         *(f'{MM * s.peak_deflection:.4f}' for s in summaries)),
+    ]
+    return table(['', *(s.title for s in summaries)], rows)
+
+
 def paper_report(*, facts, stages, frequencies, critical, limit, figures, recording,
-                 command) -> str:
-    """The whole reproduction report (Markdown)."""
+                 command, real_rig=None) -> str:
+    """The whole reproduction report (Markdown).
+
+    ``real_rig``: (the two :class:`~rotrod_core.rig_comparison.RigSummary`, the Campbell
+    figure's file name, the Eq. 26 hold speed in rad/s), or None.
+    """
     verdicts = {}
     for f in facts:
         verdicts[f.verdict] = verdicts.get(f.verdict, 0) + 1
@@ -145,13 +169,29 @@ def paper_report(*, facts, stages, frequencies, critical, limit, figures, record
         'simulated run of 40 s from u = 0.1 mm at each constant speed.',
         frequency_table(frequencies),
         f'## Critical speed vs eccentricity for a {MM * limit:.1f} mm limit (Fig. 10)',
-        'Closed forms of MODEL.md for three starts; numerical: the largest peak speed whose '
+        'Closed forms of docs/model.md for three starts; numerical: the largest peak speed whose '
         'run from rest keeps |r| within the limit (Eq. 26 shape rescaled; a step to '
         'constant speed in the rotating frame, 20 s runs).',
         critical_table(critical),
         '## Figures',
         figure_list(figures),
     ]
+    if real_rig is not None:
+        summaries, campbell_figure, hold = real_rig
+        rig = summaries[-1]
+        parts += [
+            '## A real rig beside the paper\'s idealisation',
+            'The paper\'s rod is massless and feels no gravity. A real rig stands upright on '
+            f'a horizontal disk (g = {rig.params.gravity:g} m/s^2: the tip\'s weight '
+            'compresses the rod and softens it sideways) with a steel rod of its own mass '
+            '(docs/real_rig.md, `config/real_rig.yaml`). Same Table 1, same Eq. 26 run:',
+            real_rig_table(summaries, limit),
+            f'On the real rig the paper\'s own {hold:g} rad/s hold is '
+            + ('beyond' if rig.critical_speed < hold else 'within')
+            + f' the {MM * limit:.1f} mm criterion.',
+            f'![Campbell diagrams of both models]({campbell_figure})\n\n'
+            '*Campbell diagrams: the paper\'s idealisation and the real rig*',
+        ]
     if recording:
         parts += ['## Rerun recording',
                   f'`{recording}`: the Eq. 26 run at 100 Hz (u, v, omega, hub torque, f1 and '

@@ -3,7 +3,9 @@
 Writes into one output directory (checked first, before any work):
 
 - ``fig03_angular_velocity.png`` ... ``fig10_critical_speed.png``: the paper's figures;
-- ``report.md``: the fact table, stage extremes, frequencies, critical speeds, figures;
+- ``report.md``: the fact table, stage extremes, frequencies, critical speeds, figures,
+  and a real rig (gravity, a steel rod) beside the paper's idealisation;
+- ``real_rig_campbell.png``: Campbell diagrams of both models;
 - ``eq26.rrd``: the Eq. 26 run as a Rerun recording (unless ``recording=False``).
 
 Progress goes to stderr, one numbered line per step with its duration. Headless:
@@ -20,9 +22,11 @@ from . import figures, report
 from .analysis import static_deflection
 from .coupling_drift import compare_couplings
 from .output import Progress, prepare_output_dir
+from .rig_comparison import real_rig, summarize
 from .stages import stage_extremes
 
 REPORT = 'report.md'
+REAL_RIG_CAMPBELL = 'real_rig_campbell.png'
 RECORDING = 'eq26.rrd'
 FIGURES = (
     ('fig03_angular_velocity.png', 'Fig. 3: angular velocity of Eq. 26 vs time'),
@@ -100,7 +104,7 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
     out = prepare_output_dir(out_dir)
     _require(recording)
     params = paper.TABLE1
-    progress = Progress('reproduce', 7 + bool(recording), stream=stream)
+    progress = Progress('reproduce', 8 + bool(recording), stream=stream)
     with progress.step('Eq. 26 run (Table 1, 40 s, dt = 1 ms)'):
         run = paper.eq26_run(params)
     with progress.step(f'dynamic frequencies at {len(paper.FREQUENCY_SPEEDS)} constant speeds '
@@ -113,8 +117,16 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
         drift = compare_couplings()
     with progress.step('facts (and the Eq. 29 and w = w0 runs)'):
         facts = paper.paper_facts(run, frequencies, critical, drift, params)
-    with progress.step(f'{len(FIGURES)} figures'):
+    with progress.step('a real rig beside the idealisation (gravity, steel rod; '
+                       'two Eq. 26 runs, Campbell diagrams)'):
+        summaries = [summarize(title, p, paper.EQ26, paper.RUN_LENGTH, paper.RUN_STEP,
+                               paper.DEFLECTION_LIMIT)
+                     for title, p in (("the paper's idealisation", params),
+                                      ('real rig', real_rig(params)))]
+    with progress.step(f'{len(FIGURES) + 1} figures'):
         paths = _draw(run, frequencies, critical, params, out)
+        paths += (figures.campbell_plot({s.title: s.campbell for s in summaries},
+                                        out / REAL_RIG_CAMPBELL),)
     rrd = None
     if recording:
         with progress.step(f'Rerun recording {RECORDING}'):
@@ -126,7 +138,8 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
             facts=facts, stages=stage_extremes(run, paper.EQ26.period),
             frequencies=frequencies, critical=critical, limit=paper.DEFLECTION_LIMIT,
             figures=list(FIGURES), recording=RECORDING if recording else None,
-            command=command)
+            command=command,
+            real_rig=(summaries, REAL_RIG_CAMPBELL, paper.EQ26.omega_max))
         report_path = out / REPORT
         report_path.write_text(text, encoding='utf-8')
     verdicts = ', '.join(f'{sum(f.verdict == v for f in facts)} {v}'

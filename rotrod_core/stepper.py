@@ -28,11 +28,12 @@ def check_coupling(params: RodParams, coupling: str) -> None:
 def check_rotary_inertia(params: RodParams, coupling: str, state: State) -> None:
     """Raise ValueError if the torque drive has no rotary inertia at ``state``.
 
-    With the paper's coupling and J = 0 the inertia is m rho^2, zero with the mass on
-    the axis: w' is undefined there.
+    With the paper's coupling and J = 0 the inertia is M rho^2 (+ the rod's share
+    of r0^2), zero with the mass on the axis: w' is undefined there.
     """
-    x = float(params.eccentricity) + state.u
-    if coupling == 'paper' and not params.hub_inertia + params.mass * (
+    co = Coefficients.from_params(params)
+    x = float(co.load_radius) + state.u
+    if coupling == 'paper' and not co.rotor_inertia + co.modal_mass * (
             x * x + state.v * state.v) > 0:
         raise ValueError('torque drive with the paper coupling needs rotary inertia: '
                          'hub_inertia > 0, or the mass off the axis (eccentricity > 0 or '

@@ -6,7 +6,7 @@ The forward whirl (amplitude a, circular frequency wf) turns in the sense of +e3
 backward one (b, wb) against it. Their sum is an ellipse with semi-axes |a| + |b| and
 ||a| - |b||, whose axis turns at (wf - wb) / 2 rad/s: a fixed ellipse when wf = wb,
 a "petal" pattern otherwise. This is how an isotropic rod's free vibration looks at
-constant rotation (MODEL.md: wf = w0 - w, wb = w0 + w), so the fit measures the
+constant rotation (docs/model.md: wf = w0 - w, wb = w0 + w), so the fit measures the
 dynamic frequencies, the static deflection c and the shape of the motion from a
 simulated trajectory alone.
 

@@ -4,7 +4,7 @@ At constant w the free vibration of z = u + i v (m, rotating frame) is
 
     z(t) = z_s + a1 exp(+i 2pi f1 t) + a2 exp(-i 2pi f2 t)
 
-(MODEL.md, Eq. 28): the forward whirl at the positive frequency f1 = (w0 - w) / 2pi,
+(docs/model.md, Eq. 28): the forward whirl at the positive frequency f1 = (w0 - w) / 2pi,
 the backward whirl at the negative frequency -f2 = -(w0 + w) / 2pi (for 0 <= w < w0;
 for w < 0 the two signs swap roles). The sign of the frequency of the complex signal
 separates them; z_s is the static (eccentric) deflection.

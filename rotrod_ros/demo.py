@@ -168,8 +168,8 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     say(summary['table'])
     say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
         f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
-        f'mm ({summary["dv_rel"]:.2%} of max |v|); stream start at t = '
-        f'{summary["shift"]:.3f} s of the recording')
+        f'mm ({summary["dv_rel"]:.2%} of max |v|); the profile starts '
+        f'{summary["lead_s"]:.3f} s into the recording')
     say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
         f'with: rerun {output}')
     return summary
@@ -188,7 +188,8 @@ def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
     dv = float(np.max(np.abs(vv - np.interp(tt, offline.t, offline.v))))
     recorded = series_stage_extremes(tt, uu, vv, profile.period, t_end=t_run)
     reference = series_stage_extremes(offline.t, offline.u, offline.v, profile.period)
-    return {'table': format_stage_table(recorded, reference), 'shift': shift,
+    lead = shift - min(t[0], tu[0])       # the recording's start to the profile's
+    return {'table': format_stage_table(recorded, reference), 'shift': shift, 'lead_s': lead,
             'du': du, 'dv': dv, 'du_rel': du / float(np.max(offline.u)),
             'dv_rel': dv / float(np.max(np.abs(offline.v))), 'samples': int(len(t)),
             'stages': recorded, 'reference': reference}

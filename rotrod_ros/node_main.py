@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Callable
 
 import rclpy
@@ -13,6 +14,24 @@ from rclpy.utilities import remove_ros_args
 
 class ConfigurationError(ValueError):
     """A node's parameters are invalid: it exits with status 2 and the reason."""
+
+
+SHUTDOWN_GRACE = 1.0
+"""Wall seconds an error raised by the executor may precede the context's shutdown.
+
+rclpy's signal handler shuts the context down from a thread of its own: the executor,
+woken by the same signal, can fail on a subscription being torn down (seen: a
+RuntimeError from take_message) before ``rclpy.ok()`` turns false."""
+
+
+def _shutting_down() -> bool:
+    """Whether the context shuts down within :data:`SHUTDOWN_GRACE` (polled)."""
+    deadline = time.monotonic() + SHUTDOWN_GRACE
+    while rclpy.ok():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
@@ -57,7 +76,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         except Exception:
-            if rclpy.ok():
+            if not _shutting_down():
                 raise
         return 0
     finally:

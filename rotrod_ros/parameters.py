@@ -13,6 +13,8 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+
 from rotrod_core.engine import DRIVES, EngineConfig
 from rotrod_core.model import COUPLINGS, STATE_FIELDS
 from rotrod_core.params import SECTIONS, RodParams
@@ -61,6 +63,13 @@ ROD_SPECS = (
     Spec('section_thickness', 0.0,
          'rectangular section size h along e2 (tangential), m; 0 = unused (circular)',
          0.0, 10.0),
+    Spec('gravity', _ROD.gravity,
+         'gravity along the rod, m/s^2: > 0 the rod stands up with the mass on top (its '
+         'weight compresses and softens it), < 0 it hangs (tension stiffens it), 0 = the '
+         'paper; compression at or past buckling is refused', -1e3, 1e3),
+    Spec('rod_density', _ROD.rod_density,
+         "density of the rod's material, kg/m^3 (one-mode Rayleigh-Ritz: modal mass "
+         'm + 33/140 rho A l); 0 = massless, the paper', 0.0, 1e5),
 )
 
 ENGINE_SPECS = (
@@ -81,10 +90,17 @@ ENGINE_SPECS = (
     Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque, N m (> 0)',
          0.0, 1e9),
     Spec('deflection_limit', _ENGINE.deflection_limit,
-         'tip deflection sqrt(u^2 + v^2) beyond which the simulation halts (ERROR), m (> 0)',
-         0.0, 100.0),
+         'the critical deflection (the paper\'s 3 mm criterion), m (> 0): while the tip '
+         'deflection sqrt(u^2 + v^2) is beyond it, diagnostics are ERROR ("beyond the '
+         'critical deflection", with the first crossing and the peak); the simulation '
+         'goes on and accepts commands', 0.0, 100.0),
     Spec('warn_fraction', _ENGINE.warn_fraction,
          'fraction of deflection_limit above which diagnostics WARN, 1', 0.0, 1.0),
+    Spec('max_deflection_ratio', _ENGINE.max_deflection_ratio,
+         'model-validity bound on the tip deflection over the rod length, |r| / l, 1: '
+         'beyond it the small-deflection model means nothing (its foreshortening '
+         '0.6 (|r|/l)^2 is 0.6 % at 0.1) and the simulation halts at the last good state '
+         'until ~/reset; 0 = no bound', 0.0, 1.0),
     Spec('critical_margin', _ENGINE.critical_margin,
          'relative distance to a critical speed within which diagnostics WARN, 1', 0.0, 1.0),
     Spec('setpoint_delay', _ENGINE.setpoint_delay,
@@ -122,6 +138,11 @@ NODE_SPECS = (
          read_only=True),
     Spec('diagnostics_rate', 1.0, 'rate of /diagnostics (also sent on a change of level), '
          'Hz of wall time', 0.01, 100.0),
+    Spec('deflection_noise', 0.0,
+         'standard deviation of Gaussian noise added to the published tip/deflection '
+         '(u and v each; a sensor), m; never to the state; 0 = none', 0.0, 1.0),
+    Spec('noise_seed', 0, 'seed of the deflection noise: the same seed, the same noise '
+         '(a reproducible run)', 0, 2**31 - 1, integer=True),
     Spec('estimate_window', 1.0,
          'window of the whirl-frequency estimate from the published tip motion '
          '(frequencies/estimate), s of simulated time; 0 = no estimate', 0.0, 60.0),
@@ -136,12 +157,13 @@ NODE_SPECS = (
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
          'warning otherwise', 0, 99, integer=True, read_only=True),
-    Spec('cpu_dma_latency', 0,
-         'while paced (real_time_factor > 0), the CPU wake-up latency the node asks the '
-         'kernel for (PM QoS, /dev/cpu_dma_latency, as cyclictest does), us: idle CPUs '
-         'stay out of sleep states slower to leave. 0 keeps them polling (a sleeping '
-         'thread wakes at once; idle cores stay busy, costing power); -1 = leave the '
-         'system as it is. Needs root; refused with a warning otherwise',
+    Spec('cpu_dma_latency', -1,
+         'machine-wide, opt-in (config/realtime.yaml): while paced (real_time_factor > 0), '
+         'the CPU wake-up latency the node asks the kernel for (PM QoS, '
+         '/dev/cpu_dma_latency, as cyclictest does), us: every idle CPU of the machine '
+         'stays out of sleep states slower to leave. 0 keeps them polling (a sleeping '
+         'thread wakes at once; idle cores stay busy, costing power); -1 (default) = '
+         'leave the machine as it is. Needs root; refused with a warning otherwise',
          -1, MAX_CPU_LATENCY, integer=True, read_only=True),
 )
 
@@ -162,11 +184,13 @@ class NodeSettings:
     disk_radius: float = 0.15
     frame_prefix: str = ''
     diagnostics_rate: float = 1.0
+    deflection_noise: float = 0.0
+    noise_seed: int = 0
     estimate_window: float = 1.0
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
     realtime_priority: int = 50
-    cpu_dma_latency: int = 0
+    cpu_dma_latency: int = -1
 
     @property
     def publish_period(self) -> float:
@@ -177,6 +201,21 @@ class NodeSettings:
     def publishes_clock(self) -> bool:
         """Whether /clock is published (real_time_factor != 1)."""
         return self.real_time_factor != 1.0
+
+
+def descriptor(spec: Spec) -> ParameterDescriptor:
+    """The ROS parameter descriptor of ``spec``: description, range or choices."""
+    d = ParameterDescriptor(name=spec.name, description=spec.description,
+                            read_only=spec.read_only)
+    if spec.choices:
+        d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
+    elif spec.low is not None and spec.integer:
+        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                        step=0)]
+    elif spec.low is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                     to_value=float(spec.high), step=0.0)]
+    return d
 
 
 def check_value(spec: Spec, value: Any) -> None:
@@ -198,6 +237,15 @@ def check_value(spec: Spec, value: Any) -> None:
         raise ValueError(f'{spec.name} must be in [{spec.low:g}, {spec.high:g}], got {value!r}')
 
 
+def rod_params(values: dict) -> RodParams:
+    """The RodParams of the ROD_SPECS values (section sizes 0 = unused); ValueError."""
+    rod = {s.name: values[s.name] for s in ROD_SPECS}
+    for name in ('section_width', 'section_thickness'):
+        if rod[name] == 0.0:
+            rod[name] = None
+    return RodParams(**rod)
+
+
 def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     """Validate a complete set of parameter values; return the engine config and node settings.
 
@@ -206,11 +254,7 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     for name, value in values.items():
         if name in SPECS_BY_NAME:
             check_value(SPECS_BY_NAME[name], value)
-    rod = {s.name: values[s.name] for s in ROD_SPECS}
-    for name in ('section_width', 'section_thickness'):
-        if rod[name] == 0.0:
-            rod[name] = None
-    params = RodParams(**rod)
+    params = rod_params(values)
     initial = {name: values[f'initial.{name}'] for name in STATE_FIELDS
                if values[f'initial.{name}'] != 0.0}
     engine = EngineConfig(params=params, initial=initial,

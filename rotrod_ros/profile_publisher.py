@@ -10,7 +10,7 @@ matched it too), then streams for ``duration`` seconds (0: to the profile's end)
 start and end, and exits, unless ``loop`` (start over) or ``hold`` (keep publishing
 the last value) is set.
 
-Profiles (rotrod_core.profiles): eq26 (period, omega_max: MODEL.md's Eq. 26),
+Profiles (rotrod_core.profiles): eq26 (period, omega_max: docs/model.md's Eq. 26),
 constant (omega_max), step (omega_before -> omega_max at t_step), ramp (0 -> omega_max
 over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
 f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).
@@ -29,15 +29,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from rotrod_core.profiles import (
-    ConstantProfile,
-    Eq26Profile,
-    Profile,
-    RampProfile,
-    SineSweepProfile,
-    StepProfile,
-    TableProfile,
-)
+from rotrod_core.profiles import OPTION_PROFILES, PROFILE_OPTIONS, Profile, profile_from_options
 
 from . import node_main, scheduling
 from .node_main import ConfigurationError
@@ -57,20 +49,9 @@ copes with a burst (OmegaSetpointShaper), but a burst is a profile delivered lat
 
 # name, default, description (unit), (low, high) or None
 PARAMETERS = (
-    ('profile', 'eq26', 'eq26 | constant | step | ramp | sine_sweep | table', None),
-    ('period', 15.0, 'eq26: stage length T, s', (0.0, 1e6)),
-    ('omega_max', 2.0, 'eq26 and ramp: top speed; constant: the speed; step: the speed '
-                       'after the step, rad/s', (-1e4, 1e4)),
-    ('omega_before', 0.0, 'step: the speed before the step, rad/s', (-1e4, 1e4)),
-    ('t_step', 1.0, 'step: time of the step, s', (0.0, 1e6)),
-    ('ramp_time', 15.0, 'ramp: duration of the ramp, s', (0.0, 1e6)),
-    ('t_start', 0.0, 'ramp: start of the ramp, s', (0.0, 1e6)),
-    ('amplitude', 0.2, 'sine_sweep: amplitude of w, rad/s', (-1e4, 1e4)),
-    ('f_start', 0.5, 'sine_sweep: frequency at the start, Hz', (0.0, 1e4)),
-    ('f_end', 4.0, 'sine_sweep: frequency at the end, Hz', (0.0, 1e4)),
-    ('sweep_time', 30.0, 'sine_sweep: duration of the sweep, s', (0.0, 1e6)),
-    ('offset', 0.0, 'sine_sweep: mean speed, rad/s', (-1e4, 1e4)),
-    ('table_file', '', 'table: CSV file of (time s, omega rad/s) rows', None),
+    ('profile', 'eq26', ' | '.join(OPTION_PROFILES), None),
+    *((o.name, o.default, f'{o.description}' + (f', {o.unit}' if o.unit else ''),
+       None if o.low is None else (o.low, o.high)) for o in PROFILE_OPTIONS),
     ('rate', 100.0, 'publishing rate, Hz of the node clock', (0.0, 1e5)),
     ('duration', 0.0, 'how long to stream, s of the node clock; 0 = to the profile\'s end',
      (0.0, 1e9)),
@@ -84,25 +65,7 @@ PARAMETERS = (
 
 def make_profile(values: dict) -> Profile:
     """The profile described by the parameter values (raises ValueError with the reason)."""
-    name = values['profile']
-    if name == 'eq26':
-        return Eq26Profile(period=values['period'], omega_max=values['omega_max'])
-    if name == 'constant':
-        return ConstantProfile(values['omega_max'])
-    if name == 'step':
-        return StepProfile(values['omega_max'], t_step=values['t_step'],
-                           omega_before=values['omega_before'])
-    if name == 'ramp':
-        return RampProfile(values['omega_max'], values['ramp_time'], t_start=values['t_start'])
-    if name == 'sine_sweep':
-        return SineSweepProfile(values['amplitude'], values['f_start'], values['f_end'],
-                                duration=values['sweep_time'], offset=values['offset'])
-    if name == 'table':
-        if not values['table_file']:
-            raise ValueError('profile table needs the parameter table_file')
-        return TableProfile.from_csv(values['table_file'])
-    raise ValueError(f"profile must be one of eq26, constant, step, ramp, sine_sweep, table; "
-                     f"got {name!r}")
+    return profile_from_options(values['profile'], values)
 
 
 class ProfilePublisher(Node):

@@ -4,7 +4,10 @@ Node ``rotrod_rerun_logger``. Subscribes (relative names) to joint_states,
 tip/deflection, tip/position, frequencies and frequencies/estimate, and writes
 ``output`` (a .rrd file) with time on the message stamps and a default blueprint,
 so the file opens as a dashboard: ``rerun rotrod.rrd``. With ``serve:=true`` it also
-serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``).
+serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``). With
+``record_from:=motion`` it keeps only the last ``pretrigger`` seconds until the hub's
+angular velocity first changes: the file begins just before the motion, not when the
+logger started.
 
 Data is written in batches every ``flush_period`` seconds. On SIGINT, SIGTERM or the
 end of the run the messages already received but not yet handled are taken too, the
@@ -42,7 +45,14 @@ PARAMETERS = (
     ('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
     ('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)'),
     ('flush_period', 0.25, 'seconds of wall time between writes of the buffered data'),
+    ('record_from', 'start', 'start: record from the first message; motion: keep only '
+     'the last pretrigger seconds until the hub\'s angular velocity first differs from '
+     'the first one received, then record everything (the file begins just before the '
+     'motion, not when the logger started)'),
+    ('pretrigger', 0.5, 'with record_from motion: seconds of stamp time kept from before '
+     'the hub first moved (>= 0)'),
 )
+RECORD_FROM = ('start', 'motion')
 
 
 class RerunLogger(Node):
@@ -60,13 +70,22 @@ class RerunLogger(Node):
                                      f'{values["flush_period"]!r}')
         if not 0 < values['serve_port'] < 65536:
             raise ConfigurationError(f'serve_port must be a TCP port, got {values["serve_port"]}')
+        if values['record_from'] not in RECORD_FROM:
+            raise ConfigurationError(f'record_from must be one of {RECORD_FROM}, got '
+                                     f'{values["record_from"]!r}')
+        on_motion = values['record_from'] == 'motion'
         try:
             self.writer = RecordingWriter(values['output'],
                                           serve_port=values['serve_port'] if values['serve']
+                                          else None,
+                                          pretrigger=values['pretrigger'] if on_motion
                                           else None)
+        except ValueError as exc:
+            raise ConfigurationError(str(exc)) from None
         except Exception as exc:  # rerun raises several kinds for a bad path or port
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
+        self._omega_at_rest = 0.0
         self._topics = [   # in the order a tick publishes them (see _drain)
             self.create_subscription(JointState, 'joint_states', self._on_joint, QOS_DEPTH),
             self.create_subscription(Vector3Stamped, 'tip/deflection', self._on_deflection,
@@ -87,11 +106,16 @@ class RerunLogger(Node):
         if 'hub' not in msg.name:
             return
         i = list(msg.name).index('hub')
-        t = to_seconds(msg.header.stamp)
+        t, omega = to_seconds(msg.header.stamp), msg.velocity[i]
         if self._last_stamp is None:
             self.get_logger().info(f'receiving: first joint state stamped {t:.3f} s')
+            self._omega_at_rest = omega
         self._last_stamp = t
-        self.writer.add_state(t, msg.velocity[i], msg.effort[i])
+        self.writer.add_state(t, omega, msg.effort[i])
+        if self.writer.armed and omega != self._omega_at_rest:
+            self.writer.trigger()
+            self.get_logger().info(f'recording: the hub moved at stamp {t:.3f} s; the file '
+                                   f'starts {self.writer.pretrigger:g} s before')
 
     def _on_deflection(self, msg: Vector3Stamped) -> None:
         self.writer.add_deflection(to_seconds(msg.header.stamp), msg.vector.x, msg.vector.y)

@@ -11,7 +11,8 @@ Subscriptions:
   and torque drive sets the torque to 0; /diagnostics WARN until a command comes.
 Publications (every 1/publish_rate of simulated time):
   joint_states    sensor_msgs/JointState       joint 'hub': theta rad, w rad/s, torque N m
-  tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating)
+  tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating),
+                  plus Gaussian noise of deflection_noise m (a sensor's; 0 by default)
   tip/position    geometry_msgs/PointStamped   mass position, m, in frame 'world'
   frequencies     std_msgs/Float64MultiArray   [f1, f2] Hz at the current w
   frequencies/estimate  std_msgs/Float64MultiArray  [f1, f2] Hz estimated from the
@@ -46,12 +47,8 @@ import traceback
 from collections import deque
 from typing import NamedTuple
 
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+import numpy as np
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.logging import get_logger
@@ -69,7 +66,7 @@ from rotrod_core.whirl import WhirlEstimator
 from . import messages, node_main, scheduling
 from .node_main import ConfigurationError
 from .pacing import Pacer, StampClock
-from .parameters import ALL_SPECS, SPECS_BY_NAME, Spec, build_settings
+from .parameters import ALL_SPECS, SPECS_BY_NAME, build_settings, descriptor
 
 NODE_NAME = 'rotrod_simulator'
 MAX_BACKLOG = 1.0
@@ -115,20 +112,6 @@ class Sample(NamedTuple):
     frequencies: tuple
     position: tuple
     markers: bool
-
-
-def _descriptor(spec: Spec) -> ParameterDescriptor:
-    d = ParameterDescriptor(name=spec.name, description=spec.description,
-                            read_only=spec.read_only)
-    if spec.choices:
-        d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    elif spec.low is not None and spec.integer:
-        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
-                                        step=0)]
-    elif spec.low is not None:
-        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
-                                                     to_value=float(spec.high), step=0.0)]
-    return d
 
 
 class SimulatorNode(Node):
@@ -179,6 +162,7 @@ class SimulatorNode(Node):
         self._pub_estimate = self.create_publisher(
             Float64MultiArray, 'frequencies/estimate', 10)
         self._estimator = self._make_estimator(self.settings)
+        self._noise = np.random.default_rng(self.settings.noise_seed)
         self._pub_markers = self.create_publisher(messages.MarkerArray, 'markers', 10)
         self._pub_diagnostics = self.create_publisher(
             messages.DiagnosticArray, '/diagnostics', 10)
@@ -195,7 +179,7 @@ class SimulatorNode(Node):
         values = {}
         for spec in ALL_SPECS:
             try:
-                param = self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+                param = self.declare_parameter(spec.name, spec.default, descriptor(spec))
             except ParameterException as exc:
                 raise ConfigurationError(f'parameter {spec.name}: {exc}') from None
             values[spec.name] = param.value
@@ -244,6 +228,8 @@ class SimulatorNode(Node):
         if settings.real_time_factor != old.real_time_factor:
             self._restart_clock()
         self._countdown = min(self._countdown, self._publish_steps)
+        if settings.noise_seed != old.noise_seed:
+            self._noise = np.random.default_rng(settings.noise_seed)
         if settings.marker_trail_length != old.marker_trail_length:
             self._trail = deque(self._trail, maxlen=max(1, settings.marker_trail_length))
 
@@ -579,15 +565,18 @@ class SimulatorNode(Node):
     def _publish(self, s: Sample, settings, config, estimator) -> None:
         self._published = (s.time, time.monotonic())
         st = s.state
+        u, v = st.u, st.v
+        if settings.deflection_noise:              # a sensor's noise: the state is untouched
+            du, dv = self._noise.normal(0.0, settings.deflection_noise, 2)
+            u, v = u + float(du), v + float(dv)
         self._pub_joint.publish(messages.joint_state(s.stamp, st.theta, st.omega, s.torque))
-        self._pub_deflection.publish(messages.deflection(s.stamp, st.u, st.v,
-                                                         self._rotor_frame))
+        self._pub_deflection.publish(messages.deflection(s.stamp, u, v, self._rotor_frame))
         self._pub_position.publish(messages.position(s.stamp, s.position, self._world_frame))
         self._pub_frequencies.publish(messages.frequencies(*s.frequencies))
         if settings.publishes_clock:
             self._pub_clock.publish(messages.clock(s.stamp))
         if estimator is not None:
-            estimate = estimator.push(s.time, st.u, st.v)
+            estimate = estimator.push(s.time, u, v)
             if estimate is not None:
                 self._pub_estimate.publish(messages.frequencies(estimate.f1, estimate.f2))
         if s.markers:

@@ -1,11 +1,16 @@
 """What the node tests and the real-time bench share: unique namespaces, starting the
-simulator, reading stamps and DDS timestamps, and a process's memory and CPU time."""
+simulator, commanding it and setting its parameters, reading stamps and DDS timestamps,
+and a process's memory and CPU time."""
 
 import hashlib
 import os
 from pathlib import Path
 
+import numpy as np
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters, SetParameters
 from ros_harness import ros_arguments
+from std_msgs.msg import Float64
 
 from rotrod_ros.messages import to_seconds
 
@@ -49,3 +54,47 @@ def cpu_seconds(pid: int) -> float:
     """User + system CPU time of a process, s."""
     fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def by_time(joint, deflection):
+    """Join joint_states and tip/deflection on their stamps: rows t, theta, w, Q, u, v."""
+    d = {stamp(m): (m.vector.x, m.vector.y) for m in deflection}
+    rows = [(stamp(j), j.position[0], j.velocity[0], j.effort[0], *d[stamp(j)])
+            for j in joint if stamp(j) in d]
+    return np.array(sorted(rows))
+
+
+def hann_mean(x):
+    w = np.hanning(len(x))
+    return float(np.sum(w * x) / np.sum(w))
+
+
+def param(name, value) -> Parameter:
+    if isinstance(value, str):
+        v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
+    elif isinstance(value, float):
+        v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+    elif isinstance(value, int) and not isinstance(value, bool):
+        v = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
+    else:
+        raise TypeError(value)
+    return Parameter(name=name, value=v)
+
+
+def set_parameters(node, ns, *params):
+    req = SetParameters.Request(parameters=list(params))
+    return node.call_service(SetParameters, f'{ns}/rotrod_simulator/set_parameters', req)
+
+
+def get_parameter(node, ns, name):
+    req = GetParameters.Request(names=[name])
+    value = node.call_service(GetParameters, f'{ns}/rotrod_simulator/get_parameters', req)
+    v = value.values[0]
+    return {ParameterType.PARAMETER_DOUBLE: v.double_value,
+            ParameterType.PARAMETER_STRING: v.string_value}[v.type]
+
+
+def omega_publisher(node, ns):
+    pub = node.node.create_publisher(Float64, f'{ns}/cmd/omega', 1000)   # lossless burst
+    node.spin_until(lambda: pub.get_subscription_count() > 0, 10, 'cmd/omega subscriber')
+    return pub

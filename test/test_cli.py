@@ -95,3 +95,40 @@ def test_plan_refusal_is_a_clear_error(tmp_path, capsys):
     assert main(['plan', '--omega', '2', '--deflection-limit', '0.002',
                  '-o', str(tmp_path / 'p.csv')]) == 2
     assert 'static deflection' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('argv, omega_end', [
+    (['--profile', 'eq26', '--period', '3', '--omega-max', '1.5'], 0.0),
+    (['--profile', 'constant', '--omega', '1.5'], 1.5),
+    (['--profile', 'step', '--omega-max', '1.5', '--omega-before', '0.5', '--t-step', '1'],
+     1.5),
+    (['--profile', 'ramp', '--omega-max', '1.5', '--ramp-time', '2', '--t-start', '1'], 1.5),
+    # w = offset + amplitude sin(2 pi (f_start t + (f_end - f_start) t^2 / (2 T))) for
+    # t <= T (here the phase at T is 2 pi x 3: back to the offset)
+    (['--profile', 'sine_sweep', '--amplitude', '0.3', '--f-start', '1', '--f-end', '2',
+      '--sweep-time', '4', '--offset', '1'], 1.0),
+    (['--profile', 'table'], 1.0),
+])
+def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
+    from rotrod_core.profiles import PROFILES
+    table = tmp_path / 'w.csv'
+    table.write_text('0,0\n2,1\n4,1\n')
+    if argv[-1] == 'table':
+        argv = [*argv, '--table', str(table)]
+    out = tmp_path / 'run.csv'
+    assert main(['simulate', *argv, '--t-end', '9', '-o', str(out)]) == 0
+    data = np.loadtxt(out, delimiter=',', skiprows=1)
+    t, omega = data[:, 0], data[:, 6]
+    assert omega[-1] == pytest.approx(omega_end, abs=1e-9)
+    assert argv[1] in PROFILES
+    if argv[1] == 'sine_sweep':
+        tt = t[t <= 4.0]
+        phase = 2 * np.pi * (1.0 * tt + (2.0 - 1.0) * tt**2 / (2 * 4.0))
+        assert np.max(np.abs(omega[t <= 4.0] - (1.0 + 0.3 * np.sin(phase)))) < 1e-9
+
+
+def test_every_registered_profile_has_a_cli_test():
+    from rotrod_core.profiles import OPTION_PROFILES, PROFILES
+    tested = {argv[1] for argv, _ in test_simulate_runs_every_profile.pytestmark[0].args[1]}
+    assert tested == set(OPTION_PROFILES)
+    assert set(PROFILES) - tested == {'spin_up'}        # made by `rotrod plan`, tested above

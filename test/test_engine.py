@@ -14,6 +14,7 @@ from rotrod_core.engine import (
     CommandRejected,
     EngineConfig,
     SimulationEngine,
+    foreshortening,
 )
 from rotrod_core.stepper import NonFiniteStateError
 
@@ -119,15 +120,44 @@ def test_a_command_applies_from_its_own_time_not_the_next_batch():
     assert eng.state.omega == pytest.approx(0.1 * 0.5 / (J + M * R0**2), rel=0.01)
 
 
-def test_the_deflection_limit_halts_at_the_last_good_state_until_reset():
+def test_the_critical_deflection_is_an_alarm_and_the_simulation_goes_on():
     eng = SimulationEngine()
-    eng.command_omega(3.0)            # static deflection beyond 3 mm: the limit is reached
-    for _ in range(20000):
+    eng.command_omega(3.0)            # static deflection 6.5 mm, beyond the 3 mm criterion
+    crossed = None
+    for _ in range(30000):
+        assert eng.step()
+        if crossed is None and eng.deflection > 3e-3:
+            crossed = eng.time
+            h = eng.health()
+            assert h.level == ERROR and 'beyond the critical deflection 3 mm' in h.message
+            assert 'still running' in h.message
+    assert eng.halted is None and eng.state.omega == 3.0
+    us = M * 9.0 * R0 / (K - M * 9.0)            # MODEL.md, u_s at 3 rad/s
+    assert us == pytest.approx(6.506e-3, rel=1e-3)
+    h = eng.health()
+    values = dict(h.values)
+    assert h.level == ERROR and f'first crossed at t = {crossed:.3f} s' in h.message
+    assert values['critical_deflection_first_crossed_s'] == pytest.approx(crossed)
+    assert values['peak_deflection_m'] >= us and values['peak_deflection_m'] < 2 * us
+    eng.command_omega(1.0)                       # commands are accepted: back below it
+    eng.advance(10000)
+    h = eng.health()
+    assert h.level == OK and eng.deflection < 3e-3
+    assert dict(h.values)['critical_deflection_first_crossed_s'] == pytest.approx(crossed)
+    eng.reset()
+    assert dict(eng.health().values)['critical_deflection_first_crossed_s'] == 'never'
+
+
+def test_the_validity_bound_halts_at_the_last_good_state_until_reset():
+    eng = SimulationEngine(EngineConfig(max_deflection_ratio=0.02))     # 6 mm for l = 0.3 m
+    assert eng.config.max_deflection == pytest.approx(0.006)
+    eng.command_omega(3.0)            # static deflection 6.5 mm: beyond the bound
+    for _ in range(30000):
         if not eng.step():
             break
-    assert eng.halted and 'beyond the limit' in eng.halted
+    assert eng.halted and "beyond the model's validity bound 6 mm" in eng.halted
     kept, clock = eng.state, eng.time
-    assert math.hypot(kept.u, kept.v) <= 3e-3
+    assert math.hypot(kept.u, kept.v) <= 6e-3
     assert not eng.step() and eng.state == kept and eng.time == clock
     assert eng.health().level == ERROR
     with pytest.raises(CommandRejected, match='halted'):
@@ -137,6 +167,19 @@ def test_the_deflection_limit_halts_at_the_last_good_state_until_reset():
     assert eng.time == clock                    # the clock does not go back
     assert eng.health().level == OK
     assert eng.step()
+
+
+def test_the_default_validity_bound_is_a_tenth_of_the_rod_length_and_0_turns_it_off():
+    assert EngineConfig().max_deflection == pytest.approx(0.03)
+    # 0.6 (delta/l)^2: the static cantilever shape's foreshortening (integral of phi'^2/2)
+    assert foreshortening(0.1) == pytest.approx(0.006)
+    xi = np.linspace(0.0, 1.0, 200001)
+    dphi = 3 * xi - 1.5 * xi**2                  # l phi'(x), phi = (3 xi^2 - xi^3) / 2
+    assert 0.5 * np.trapezoid(dphi**2, xi) == pytest.approx(0.6, rel=1e-9)
+    eng = SimulationEngine(EngineConfig(max_deflection_ratio=0.0, max_angular_acceleration=2))
+    eng.command_omega(5.9)            # u_s = 31 mm, past a tenth of the rod
+    eng.advance(8000)
+    assert eng.halted is None and eng.deflection > 0.03
 
 
 def test_a_non_finite_step_halts_and_keeps_the_state(monkeypatch):
@@ -167,7 +210,8 @@ def test_health_warns_near_the_limit_and_near_critical_speeds():
                                             deflection_limit=1.0)).health()
     assert 'natural frequency' in near_w0.message
     damped = SimulationEngine(EngineConfig(params=RodParams(damping_ratio=0.05),
-                                           deflection_limit=1.0, max_angular_acceleration=50))
+                                           deflection_limit=1.0, max_deflection_ratio=0.0,
+                                           max_angular_acceleration=50))
     damped.command_omega(14.0)                  # above w0: rotating damping destabilises
     damped.advance(400)
     assert 'unstable' in damped.health().message
@@ -224,10 +268,12 @@ def test_reconfigure_keeps_state_and_clock_and_switching_drive_keeps_the_motion(
     ({'warn_fraction': 1.5}, 'warn_fraction'),
     ({'critical_margin': 1.0}, 'critical_margin'),
     ({'mass': -0.3}, 'mass must be'),
-    ({'initial': {'u': 0.01}}, 'initial deflection'),
+    ({'initial': {'u': 0.031}}, 'initial deflection .* validity bound'),
+    ({'max_deflection_ratio': 1.5}, 'max_deflection_ratio'),
+    ({'max_deflection_ratio': -0.1}, 'max_deflection_ratio'),
     ({'initial': {'omega': 60.0}}, 'exceeds max_omega'),
     ({'initial': {'w': 1.0}}, 'unknown initial state'),
-    ({'max_angular_acceleration': 10.0}, r'bends the rod tangentially by 6.79 mm'),
+    ({'max_angular_acceleration': 50.0}, r'bends the rod tangentially by 34 mm'),
 ])
 def test_bad_configurations_are_refused_with_a_reason(changes, match):
     base = EngineConfig()

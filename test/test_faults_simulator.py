@@ -359,7 +359,7 @@ INVALID = [
     ('command_timeout', math.nan, 'Parameter command_timeout out of range'),
     ('drive', 'position', 'drive must be one of'),
     ('estimate_window', 0.05, 'estimate_window'),
-    ('max_angular_acceleration', 10.0, 'bends the rod tangentially'),
+    ('max_angular_acceleration', 50.0, 'bends the rod tangentially'),
     ('mass', 'heavy', 'Wrong parameter type'),
 ]
 

@@ -143,6 +143,9 @@ def test_the_main_job_end_to_end(tmp_path):
     keep = (tu - shift >= 0) & (tu - shift <= 40.0)
     tt = tu[keep] - shift
     assert tt[-1] - tt[0] > 39.5                       # the whole 40 s are recorded
+    # the recording begins at most 1 s before the profile (it began up to 15 s before)
+    assert 0 <= shift - min(t[0], tu[0]) <= 1.0, (shift, t[0], tu[0])
+    assert 'the profile starts' in run.stdout
     offline = simulate(RodParams(), profile, 40.0, dt=1e-3)
     du = np.max(np.abs(u[keep] - np.interp(tt, offline.t, offline.u)))
     dv = np.max(np.abs(v[keep] - np.interp(tt, offline.t, offline.v)))

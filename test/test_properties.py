@@ -43,6 +43,7 @@ from rotrod_core import (
 from rotrod_core.command import OmegaSetpointShaper
 from rotrod_core.engine import (
     ERROR,
+    MAX_DEFLECTION_RATIO,
     STEP_RESOLUTION,
     CommandRejected,
     EngineConfig,
@@ -520,7 +521,11 @@ def test_engine_configs_are_refused_with_a_reason_or_work(kwargs):
     engine = SimulationEngine(config)
     assert finite(engine.state) and finite(engine.energy()) and finite(engine.frequencies())
     assert all(finite(v) for v in engine.critical_speeds.values())
-    assert engine.health().level in (0, 1)
+    health = engine.health()
+    if engine.deflection > config.deflection_limit:   # an alarm, not a refusal
+        assert health.level == 2 and 'beyond the critical deflection' in health.message
+    else:
+        assert health.level in (0, 1)
 
 
 def mostly(sane):
@@ -572,8 +577,9 @@ def test_the_engine_state_stays_finite_or_it_halts_with_a_reason(fields, drive, 
     if coupling == 'exact' and params.hub_inertia == 0:
         coupling = 'paper'
     rate = max(1000.0, 2.5 * fastest_rate(params, max_omega) / STEP_RESOLUTION)
+    bound = MAX_DEFLECTION_RATIO * params.rod_length      # the default validity bound
     with np.errstate(all='ignore'):     # an acceleration bound that the rod can bear
-        accel = min(accel, 0.5 * limit * params.stiffness_tangential / params.mass
+        accel = min(accel, 0.5 * bound * params.stiffness_tangential / params.mass
                     / params.eccentricity)
     try:
         config = EngineConfig(params=params, drive=drive, coupling=coupling,

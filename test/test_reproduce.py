@@ -137,8 +137,10 @@ def test_paper_figures_are_drawn_images_of_640x480(reproduced, name):
 def test_reproduce_shows_numbered_progress(reproduced):
     stderr = reproduced[2]
     steps = re.findall(r'^\[reproduce (\d+)/(\d+)\] ', stderr, re.M)
-    assert [int(a) for a, _ in steps] == list(range(1, 9)) and {b for _, b in steps} == {'8'}
-    assert stderr.count('done in') == 8 and 'Eq. 26 shape:' in stderr
+    # one more step than before: the real rig beside the idealisation (issue 18)
+    assert [int(a) for a, _ in steps] == list(range(1, 10)) and {b for _, b in steps} == {'9'}
+    assert stderr.count('done in') == 9 and 'Eq. 26 shape:' in stderr
+    assert 'a real rig beside the idealisation' in stderr
 
 
 def test_report_embeds_every_figure(reproduced):
@@ -216,7 +218,7 @@ def test_fact_table_rows_match_model_md(reproduced):
     u_s = 1e3 * M * 4 * R0 / (M * W0**2 - M * 4)
     hold = row('Fig. 6', 'centrifugal')
     assert f'{u_s:.4f} mm' == '2.7921 mm'
-    assert f'= {u_s:.4f} mm at w = 2 rad/s' in hold['closed form (MODEL.md)']
+    assert f'= {u_s:.4f} mm at w = 2 rad/s' in hold['closed form (docs/model.md)']
     assert numbers(hold['measured now'])[-1] == pytest.approx(u_s, abs=1e-4)
     assert hold['verdict'] == '**agrees**'
     freq = row('Eq. 28', 'dynamic frequencies')

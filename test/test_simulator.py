@@ -4,13 +4,23 @@ offline run (through the ROS test harness; DDS stays on this machine)."""
 import math
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped, Vector3Stamped
-from node_probes import collect, namespace, stamp, start_simulator
-from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-from rcl_interfaces.srv import GetParameters, SetParameters
+from node_probes import (
+    by_time,
+    collect,
+    get_parameter,
+    hann_mean,
+    namespace,
+    omega_publisher,
+    param,
+    set_parameters,
+    stamp,
+    start_simulator,
+)
 from reference import R0, W0, K, M, eq26
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -22,50 +32,6 @@ from rotrod_ros import scheduling
 pytestmark = pytest.mark.ros
 
 FAST = 4.0          # real_time_factor for tests that do not need wall-clock pacing
-
-
-def by_time(joint, deflection):
-    """Join joint_states and tip/deflection on their stamps: rows t, theta, w, Q, u, v."""
-    d = {stamp(m): (m.vector.x, m.vector.y) for m in deflection}
-    rows = [(stamp(j), j.position[0], j.velocity[0], j.effort[0], *d[stamp(j)])
-            for j in joint if stamp(j) in d]
-    return np.array(sorted(rows))
-
-
-def hann_mean(x):
-    w = np.hanning(len(x))
-    return float(np.sum(w * x) / np.sum(w))
-
-
-def param(name, value) -> Parameter:
-    if isinstance(value, str):
-        v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
-    elif isinstance(value, float):
-        v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
-    elif isinstance(value, int) and not isinstance(value, bool):
-        v = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value)
-    else:
-        raise TypeError(value)
-    return Parameter(name=name, value=v)
-
-
-def set_parameters(node, ns, *params):
-    req = SetParameters.Request(parameters=list(params))
-    return node.call_service(SetParameters, f'{ns}/rotrod_simulator/set_parameters', req)
-
-
-def get_parameter(node, ns, name):
-    req = GetParameters.Request(names=[name])
-    value = node.call_service(GetParameters, f'{ns}/rotrod_simulator/get_parameters', req)
-    v = value.values[0]
-    return {ParameterType.PARAMETER_DOUBLE: v.double_value,
-            ParameterType.PARAMETER_STRING: v.string_value}[v.type]
-
-
-def omega_publisher(node, ns):
-    pub = node.node.create_publisher(Float64, f'{ns}/cmd/omega', 1000)   # lossless burst
-    node.spin_until(lambda: pub.get_subscription_count() > 0, 10, 'cmd/omega subscriber')
-    return pub
 
 
 def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
@@ -269,29 +235,6 @@ def test_pause_stops_simulated_time_and_resume_continues(ros_processes, ros_node
     assert np.all(np.diff(stamps) > 0)
 
 
-def test_the_deflection_limit_halts_until_reset(ros_processes, ros_node, request):
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    ns = namespace(request)
-    sim = start_simulator(ros_processes, ns, real_time_factor=FAST)
-    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
-    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=100)
-    omega_publisher(ros_node, ns).publish(Float64(data=3.0))   # beyond w_cr = 2.07 rad/s
-
-    def status(level):
-        return [s for d in diags for s in d.status
-                if s.name.startswith(f'{ns}/rotrod_simulator') and s.level == level]
-    ros_node.spin_until(lambda: status(DiagnosticStatus.ERROR), 30, 'ERROR diagnostics')
-    assert status(DiagnosticStatus.WARN)                   # it warned first
-    assert 'beyond the limit' in status(DiagnosticStatus.ERROR)[-1].message
-    sim.wait_for_output('simulation halted', timeout=5)
-    n = len(joint)
-    ros_node.spin_for(0.5)
-    assert len(joint) <= n + 1                              # halted: nothing new
-    assert ros_node.call_service(Trigger, f'{ns}/rotrod_simulator/reset').success
-    ros_node.spin_until(lambda: len(joint) > n + 5 and joint[-1].velocity[0] == 0.0, 10,
-                        'running again at rest')
-
-
 def test_two_namespaced_simulators_do_not_cross_talk(ros_processes, ros_node, request):
     a, b = namespace(request) + '_a', namespace(request) + '_b'
     start_simulator(ros_processes, a, real_time_factor=FAST)
@@ -307,7 +250,6 @@ def test_two_namespaced_simulators_do_not_cross_talk(ros_processes, ros_node, re
 
 
 def test_table1_params_file_loads_and_bad_files_are_refused(ros_processes, tmp_path, request):
-    from pathlib import Path
     table1 = Path(__file__).resolve().parent.parent / 'config' / 'table1.yaml'
     ns = namespace(request)
     proc = ros_processes.start_console_script(
@@ -399,7 +341,12 @@ def test_while_paced_the_node_keeps_idle_cpus_awake_and_lets_go_after(
         ros_processes, ros_node, request):
     before = scheduling.cpu_latency_limit()
     ns = namespace(request)
-    sim = start_simulator(ros_processes, ns)
+    # machine-wide, so opt-in: config/realtime.yaml asks for it
+    realtime = Path(__file__).resolve().parent.parent / 'config' / 'realtime.yaml'
+    sim = ros_processes.start_console_script(
+        'simulator', '--ros-args', '-r', f'__ns:={ns}', '--params-file', str(realtime),
+        name=ns.strip('/'))
+    sim.wait_for_output('ready', timeout=30)
     sim.wait_for_output('cpu_dma_latency: idle CPUs wake within 0 us', timeout=10)
     assert cpu_latency_requests(sim.pid) == 1 and scheduling.cpu_latency_limit() == 0
     # as fast as possible there is nothing to be on time for: released
@@ -412,10 +359,11 @@ def test_while_paced_the_node_keeps_idle_cpus_awake_and_lets_go_after(
     assert not set_parameters(ros_node, ns, param('cpu_dma_latency', 5)).results[0].successful
     sim.stop()
     assert scheduling.cpu_latency_limit() == before
-    # off by parameter
-    off = start_simulator(ros_processes, ns + '_off', cpu_dma_latency=-1)
+    # off by default: the machine is left alone
+    off = start_simulator(ros_processes, ns + '_off')
     ros_node.spin_for(0.5)
     assert cpu_latency_requests(off.pid) == 0 and scheduling.cpu_latency_limit() == before
+    assert 'cpu_dma_latency' not in off.output
 
 
 def test_the_clock_starts_after_the_physics_thread_has_set_itself_up(monkeypatch):

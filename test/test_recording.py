@@ -1,0 +1,37 @@
+"""RecordingWriter's pretrigger: a recording that begins just before the motion."""
+
+import numpy as np
+import pytest
+
+from rotrod_core import recording
+from rotrod_core.recording import RecordingWriter
+
+
+def test_an_armed_writer_keeps_only_the_pretrigger_seconds_then_records_everything(tmp_path):
+    path = tmp_path / 'r.rrd'
+    writer = RecordingWriter(path, pretrigger=0.5)
+    t = np.round(np.arange(0.0, 10.0, 0.01), 10)
+    for k, tk in enumerate(t):
+        moving = tk >= 5.0
+        writer.add_state(tk, 1.0 if moving else 0.0, 0.0)
+        writer.add_deflection(tk, 1e-3 * tk, 0.0)
+        if moving and writer.armed:
+            writer.trigger()
+        if k % 25 == 0:                  # the logger's periodic flush, before and after
+            writer.flush()
+    writer.close()
+    tw, w = recording.read_series(path, recording.OMEGA)
+    tu, u = recording.read_series(path, recording.U)
+    kept = t[t >= 4.5 - 1e-9]
+    # nothing lost after (the timeline stores whole nanoseconds)
+    assert len(tw) == len(tu) == len(kept)
+    assert np.allclose(tw, kept, rtol=0, atol=2e-9) and np.allclose(tu, kept, rtol=0, atol=2e-9)
+    assert np.array_equal(w, np.where(kept >= 5.0, 1.0, 0.0))
+    assert np.allclose(u, 1e-3 * kept)
+    assert writer.samples == len(kept)
+
+
+@pytest.mark.parametrize('pretrigger', [-1.0, float('nan'), float('inf')])
+def test_a_bad_pretrigger_is_refused(tmp_path, pretrigger):
+    with pytest.raises(ValueError, match='pretrigger'):
+        RecordingWriter(tmp_path / 'r.rrd', pretrigger=pretrigger)
