@@ -26,12 +26,14 @@ from .identify import (
 )
 from .model import State
 from .params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
+from .planner import plan_spin_up, whirl_residual
 from .profiles import (
     ConstantProfile,
     Eq26Profile,
     Profile,
     RampProfile,
     SineSweepProfile,
+    SpinUpProfile,
     StepProfile,
     TableProfile,
     make_profile,
@@ -57,6 +59,6 @@ __all__ = [
     'TableProfile', 'Whirl', 'WhirlEstimate', 'WhirlEstimator', 'WhirlSettings', 'campbell',
     'critical_speed', 'critical_speed_for_profile', 'critical_speed_from', 'disk_inertia',
     'dynamic_frequencies', 'estimate_whirl', 'estimate_whirl_frequencies', 'identify_rig',
-    'make_profile', 'modal_analysis', 'rig_cramer_rao',
-    'simulate', 'simulate_batch', 'static_deflection',
+    'make_profile', 'modal_analysis', 'plan_spin_up', 'rig_cramer_rao',
+    'simulate', 'simulate_batch', 'SpinUpProfile', 'static_deflection', 'whirl_residual',
 ]

@@ -4,6 +4,7 @@ rotrod simulate --profile eq26 -o run.csv
 rotrod simulate --drive torque --torque 0.01 --t-end 10 -o spin.npz
 rotrod frequencies --omega 0 1 2
 rotrod critical-speed --limit 0.003 --eccentricity 0.05 0.1 0.2
+rotrod plan --omega 2 --robust 0.1 --residual 1e-6 -o plan.csv
 rotrod demo
 rotrod reproduce --out out/reproduce
 rotrod analyze --out out/analyze --only campbell coupling
@@ -22,7 +23,8 @@ from .analysis import dynamic_frequencies, modal_analysis, static_deflection
 from .critical import STARTS, critical_speed, critical_speed_for_profile
 from .model import COUPLINGS
 from .params import RodParams
-from .profiles import PROFILE_OPTIONS, PROFILES, Eq26Profile, profile_from_options
+from .planner import plan_spin_up
+from .profiles import OPTION_PROFILES, PROFILE_OPTIONS, Eq26Profile, profile_from_options
 from .simulate import simulate
 from .stages import format_stage_table, stage_extremes
 
@@ -64,7 +66,7 @@ def _params(args) -> RodParams:
 
 def _add_profile(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group('angular-velocity profile (velocity drive)')
-    g.add_argument('--profile', choices=tuple(PROFILES), default='eq26')
+    g.add_argument('--profile', choices=OPTION_PROFILES, default='eq26')
     for o in PROFILE_OPTIONS:
         flags = ['--' + o.name.replace('_', '-')]
         if o.name == 'omega_max':
@@ -147,6 +149,44 @@ def cmd_critical(args) -> int:
     print('r0 [m]     ' + ''.join(f'{k:>24}' for k in cols))
     for i, r in enumerate(r0):
         print(f'{r:<10.4f} ' + ''.join(f'{np.atleast_1d(v)[i]:24.6f}' for v in cols.values()))
+    return 0
+
+
+def cmd_plan(args) -> int:
+    """Plan the fastest vibration-free change of speed; CSV, PNG and a summary line."""
+    params = _params(args)
+    if args.output.suffix.lower() != '.csv':
+        raise ValueError(f'-o must end in .csv, got {str(args.output)!r}')
+    if not args.output.parent.exists():
+        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    plan = plan_spin_up(params, args.omega, omega_start=args.start,
+                        deflection_limit=args.deflection_limit, residual=args.residual,
+                        robust=args.robust, max_angular_acceleration=args.max_acc)
+    T = plan.duration
+    start = static_deflection(params, args.start)[0]
+    run = simulate(params, plan, 1.25 * T, dt=T / 1000, initial={'u': start})
+    header = 't_s,omega_rad_s,omega_dot_rad_s2,u_m,v_m'
+    np.savetxt(args.output, np.c_[run.t, run.omega, run.omega_dot, run.u, run.v],
+               delimiter=',', header=header, comments='', fmt='%.10g')
+    figure = args.output.with_suffix('.png')
+    from .figures import require_matplotlib, spin_up_plan
+    try:
+        require_matplotlib()
+    except ImportError as exc:
+        figure = None
+        print(f'rotrod plan: no figure: {exc}', file=sys.stderr)
+    if figure is not None:
+        reference = reference_run = None
+        if args.start == 0:
+            reference = Eq26Profile(period=15.0, omega_max=args.omega)
+            reference_run = simulate(params, reference, 15.0, dt=0.01)
+        spin_up_plan(plan, run, figure, reference, reference_run, args.deflection_limit)
+    band = (f', band (1 +- {args.robust:g}) w0 residual {plan.band_residual:.3g} m'
+            if args.robust else '')
+    print(f'plan {args.start:g} -> {args.omega:g} rad/s: duration {T:.4g} s, peak '
+          f'{plan.peak_deflection:.6g} m, residual {plan.residual_amplitude:.3g} m{band}, '
+          f'max |w\'| {plan.max_angular_acceleration:.4g} rad/s^2; wrote {args.output}'
+          + (f' and {figure}' if figure is not None else ''))
     return 0
 
 
@@ -246,6 +286,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--t-end', type=_finite, default=None, help='run length [s]')
     p.add_argument('--dt', type=_finite, default=2e-3, help='step [s]')
     p.set_defaults(func=cmd_critical)
+
+    p = sub.add_parser('plan', help='the fastest vibration-free spin-up under a deflection '
+                                    'limit (CSV, PNG, summary)')
+    _add_params(p)
+    p.add_argument('--omega', type=_finite, required=True, help='target speed [rad/s]')
+    p.add_argument('--from', dest='start', type=_finite, default=0.0,
+                   help='starting speed [rad/s] (default 0)')
+    p.add_argument('--deflection-limit', type=_finite, default=3e-3,
+                   help='largest tip deflection |r| [m] (default 0.003)')
+    p.add_argument('--residual', type=_finite, default=2.5e-7,
+                   help='largest free whirl left after arrival [m] (default 2.5e-7)')
+    p.add_argument('--robust', type=_finite, default=0.0,
+                   help='hold the residual for natural frequencies within +- this '
+                        'fraction of w0 (default 0)')
+    p.add_argument('--max-angular-acceleration', dest='max_acc', type=_finite, default=None,
+                   help="bound on |w'| [rad/s^2] (default none)")
+    p.add_argument('-o', '--output', type=Path, required=True,
+                   help='FILE.csv (the figure goes beside it as FILE.png)')
+    p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
                                     'to a Rerun recording, with a stage summary')

@@ -33,6 +33,10 @@ MAP_SIZE = (12.8, 8.0)
 DRIFT_SIZE = (12.8, 4.8)
 """Coupling drift (2 panels): 1280 x 480 px."""
 
+PLAN_SIZE = (12.8, 4.8)
+"""A planned spin-up beside Eq. 26 (3 panels): 1280 x 480 px."""
+PLAN_COLORS = {'plan': '#1f77b4', 'eq26': '#7f7f7f'}
+
 STAGE_COLORS = {'spin-up': '#1f77b4', 'hold': '#2ca02c', 'spin-down': '#d62728',
                 'rest': '#9467bd'}
 WHIRL_COLORS = {'forward': '#1f77b4', 'backward': '#d62728', 'none': '#7f7f7f'}
@@ -311,4 +315,46 @@ def coupling_drift_plot(drifts: dict, path) -> Path:
         ax.legend(fontsize=8, loc='center right')
     fig.suptitle('free rotation, hub torque Q = 0: drift of the invariants '
                  f'(values below {floor:g} drawn at {floor:g})')
+    return _save(fig, path)
+
+
+def spin_up_plan(plan, run, path, reference=None, reference_run=None,
+                 deflection_limit=None) -> Path:
+    """A planned change of speed: w, w' and the tip path in the rotating frame.
+
+    Times are drawn as fractions of each profile's duration, so that the shapes
+    compare; the legend gives the durations.
+
+    ``run`` is the plan's predicted run; ``reference`` (with ``reference_run``), if
+    given, is drawn beside it in grey (Eq. 26 for a spin-up from rest).
+    """
+    fig, ax = _figure(PLAN_SIZE, 1, 3)
+    curves = [('plan', run,
+               f'plan: {plan.duration:.3g} s, residual {UM * plan.residual_amplitude:.3g} µm')]
+    if reference is not None:
+        curves.append(('eq26', reference_run,
+                       f'Eq. 26 spin-up: {reference.period:g} s'))
+    for key, r, label in curves:
+        color = PLAN_COLORS[key]
+        duration = plan.duration if key == 'plan' else reference.period
+        ax[0, 0].plot(r.t / duration, r.omega, color=color, lw=1.5, label=label)
+        ax[0, 1].plot(r.t / duration, r.omega_dot, color=color, lw=1.5, label=label)
+        _trajectory(ax[0, 2], r.u, r.v, MM, color, label)
+    if deflection_limit is not None:
+        phi = np.linspace(-0.6, 0.6, 200)
+        ax[0, 2].plot(MM * deflection_limit * np.cos(phi), MM * deflection_limit * np.sin(phi),
+                      'r--', lw=1, label=f'|r| = {MM * deflection_limit:g} mm')
+    ax[0, 0].set_xlabel('time / duration of each profile')
+    ax[0, 0].set_ylabel(r'angular velocity $\omega$ [rad/s]')
+    ax[0, 1].set_xlabel('time / duration of each profile')
+    ax[0, 1].set_ylabel(r"angular acceleration $\dot\omega$ [rad/s$^2$]")
+    ax[0, 2].set_xlabel('radial deflection u [mm]')
+    ax[0, 2].set_ylabel('tangential deflection v [mm]')
+    ax[0, 0].set_title('angular velocity', fontsize=10)
+    ax[0, 1].set_title('angular acceleration', fontsize=10)
+    ax[0, 2].set_title(f'tip path in the rotating frame (peak '
+                       f'{MM * plan.peak_deflection:.4g} mm)', fontsize=10)
+    for a in ax[0]:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8, loc='best')
     return _save(fig, path)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import BSpline, PchipInterpolator
 from scipy.special import fresnel
 
 from .checks import finite_number
@@ -581,6 +581,141 @@ class TableProfile(Profile):
         return cls(data[:, 0], data[:, 1])
 
 
+def spin_up_knots(n_free: int) -> np.ndarray:
+    """Knots (normalised time 0..1) of a :class:`SpinUpProfile` with ``n_free`` free points.
+
+    A clamped cubic B-spline with uniform interior knots.
+    """
+    return np.r_[[0.0] * 4, np.linspace(0.0, 1.0, n_free + 2)[1:-1], [1.0] * 4]
+
+
+class SpinUpProfile(Profile):
+    """A smooth change of angular velocity over ``duration``: a clamped cubic B-spline.
+
+    w(t) = sum_i c_i B_i(t / duration) for 0 <= t <= duration, with the B_i the cubic
+    B-splines on :func:`spin_up_knots` (uniform interior knots). The first two control
+    points are equal (w = c_0, w' = 0 at t = 0) and so are the last two (w = c_-1,
+    w' = 0 at the end), so w is twice continuously differentiable from the constant
+    w = c_0 before 0 to the constant w = c_-1 after ``duration``. This is the shape
+    :func:`rotrod_core.plan_spin_up` returns; it also fills the planner's predictions.
+
+    Args:
+        duration: length of the change, s (> 0).
+        control_points: B-spline coefficients, rad/s (at least 4; c_0 = c_1 and
+            c_-2 = c_-1).
+        peak_deflection: the planner's predicted largest |r| over the whole run, m.
+        residual_amplitude: the planner's predicted free-whirl amplitude left about
+            the static deflection at the final speed, m (nominal parameters).
+        band_residual: the largest predicted residual over the planner's robust band
+            of natural frequencies, m (equals ``residual_amplitude`` without one).
+        robust: half-width eps of that band, (1 +- eps) w0.
+    """
+
+    def __init__(self, duration, control_points, *, peak_deflection=None,
+                 residual_amplitude=None, band_residual=None, robust=0.0):
+        self.duration = _finite('SpinUpProfile', 'duration', duration, positive=True)
+        try:
+            c = np.array(control_points, dtype=float).ravel()
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError('SpinUpProfile: control_points must be numbers') from None
+        if c.size < 4 or not np.all(np.isfinite(c)):
+            raise ValueError(f'SpinUpProfile needs >= 4 finite control points, got {c.size}')
+        if c[0] != c[1] or c[-2] != c[-1]:
+            raise ValueError("SpinUpProfile: the first two and the last two control points "
+                             "must be equal (w' = 0 at both ends)")
+        self.control_points = c
+        for name, value in (('peak_deflection', peak_deflection),
+                            ('residual_amplitude', residual_amplitude),
+                            ('band_residual', band_residual)):
+            setattr(self, name, None if value is None else _finite(
+                'SpinUpProfile', name, value, nonnegative=True))
+        self.robust = _finite('SpinUpProfile', 'robust', robust, nonnegative=True)
+        T = self.duration
+        _require_finite('SpinUpProfile.duration', "the slope w' ~ c / duration",
+                        64.0 * float(np.max(np.abs(c))) / T)
+        _require_finite('SpinUpProfile.duration', 'the angle ~ c duration',
+                        float(np.max(np.abs(c))) * T)
+        self._w = BSpline(spin_up_knots(c.size - 4), c, 3, extrapolate=False)
+        self._dw = self._w.derivative()
+        self._theta = self._w.antiderivative()
+
+    def __repr__(self):
+        return (f'SpinUpProfile({self.omega_start:g} -> {self.omega_target:g} rad/s in '
+                f'{self.duration:.4g} s, {self.control_points.size} control points)')
+
+    @property
+    def omega_start(self) -> float:
+        """Angular velocity before and at t = 0, rad/s."""
+        return float(self.control_points[0])
+
+    @property
+    def omega_target(self) -> float:
+        """Angular velocity at and after ``duration``, rad/s."""
+        return float(self.control_points[-1])
+
+    def _x(self, t):
+        return np.clip(np.asarray(t, dtype=float) / self.duration, 0.0, 1.0)
+
+    @_evaluation
+    def omega(self, t):
+        """Angular velocity, rad/s."""
+        return _out(t, self._w(self._x(t)))
+
+    @_evaluation
+    def omega_dot(self, t):
+        """Angular acceleration, rad/s^2 (0 before 0 and after ``duration``)."""
+        tt = np.asarray(t, dtype=float)
+        inside = (tt >= 0) & (tt <= self.duration)
+        return _out(t, np.where(inside, self._dw(self._x(t)) / self.duration, 0.0))
+
+    @_evaluation
+    def angle(self, t):
+        """Hub angle, rad (integral of the spline, exact)."""
+        tt = np.asarray(t, dtype=float)
+        T = self.duration
+        mid = T * self._theta(self._x(t))
+        head = self.omega_start * np.minimum(tt, 0.0)
+        tail = self.omega_target * np.maximum(tt - T, 0.0)
+        return _out(t, head + mid + tail)
+
+    @property
+    def max_angular_acceleration(self) -> float:
+        """Largest |w'| over the change, rad/s^2.
+
+        Exact: w'' is piecewise linear, so |w'| peaks on a knot or a zero of w''.
+        """
+        d2 = self._dw.derivative()
+        knots = np.unique(self._w.t)
+        x = [knots]
+        for a, b in zip(knots[:-1], knots[1:]):
+            ya, yb = d2(a + 1e-15 * (b - a)), d2(b - 1e-15 * (b - a))
+            if ya * yb < 0:
+                x.append([a + (b - a) * ya / (ya - yb)])
+        return float(np.max(np.abs(self._dw(np.concatenate(x))))) / self.duration
+
+    @property
+    def peak(self) -> float:
+        """Largest |w|, rad/s (a spline lies within its control points: found on a grid)."""
+        x = np.linspace(0.0, 1.0, 2001)
+        return float(max(np.max(np.abs(self._w(x))), abs(self.omega_start),
+                         abs(self.omega_target)))
+
+    @property
+    def end_time(self) -> float:
+        """``duration``, s."""
+        return self.duration
+
+    def with_peak(self, omega_peak: float) -> SpinUpProfile:
+        """Control points scaled so the peak |w| is ``omega_peak``.
+
+        The planner's predictions are dropped: the scaled profile is not the plan.
+        """
+        omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
+        if self.peak == 0:
+            raise ValueError('SpinUpProfile.with_peak: an all-zero profile has no shape')
+        return SpinUpProfile(self.duration, self.control_points * (omega_peak / self.peak))
+
+
 PROFILES = {
     'eq26': Eq26Profile,
     'constant': ConstantProfile,
@@ -588,6 +723,7 @@ PROFILES = {
     'ramp': RampProfile,
     'sine_sweep': SineSweepProfile,
     'table': TableProfile,
+    'spin_up': SpinUpProfile,
 }
 
 
@@ -622,6 +758,11 @@ PROFILE_OPTIONS = (
 """The settings of :func:`profile_from_options`, one naming for the CLI and the nodes."""
 
 
+OPTION_PROFILES = ('eq26', 'constant', 'step', 'ramp', 'sine_sweep', 'table')
+"""The profiles :func:`profile_from_options` builds from options (a planned spin-up is
+made by :func:`rotrod_core.plan_spin_up`, ``rotrod plan``)."""
+
+
 def profile_from_options(name: str, options: dict) -> Profile:
     """The profile ``name`` built from :data:`PROFILE_OPTIONS` values (missing: default).
 
@@ -644,11 +785,11 @@ def profile_from_options(name: str, options: dict) -> Profile:
         if not o['table_file']:
             raise ValueError('profile table needs a table file (table_file, --table)')
         return TableProfile.from_csv(o['table_file'])
-    raise ValueError(f'profile must be one of {", ".join(PROFILES)}; got {name!r}')
+    raise ValueError(f'profile must be one of {", ".join(OPTION_PROFILES)}; got {name!r}')
 
 
 def make_profile(name: str, **kwargs: Any) -> Profile:
-    """Build a profile by name: eq26, constant, step, ramp, sine_sweep, table (keywords)."""
+    """Build a profile by name (eq26, constant, step, ramp, sine_sweep, table, spin_up)."""
     try:
         cls = PROFILES[name]
     except KeyError:

@@ -29,7 +29,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from rotrod_core.profiles import PROFILE_OPTIONS, PROFILES, Profile, profile_from_options
+from rotrod_core.profiles import OPTION_PROFILES, PROFILE_OPTIONS, Profile, profile_from_options
 
 from . import node_main, scheduling
 from .node_main import ConfigurationError
@@ -49,7 +49,7 @@ copes with a burst (OmegaSetpointShaper), but a burst is a profile delivered lat
 
 # name, default, description (unit), (low, high) or None
 PARAMETERS = (
-    ('profile', 'eq26', ' | '.join(PROFILES), None),
+    ('profile', 'eq26', ' | '.join(OPTION_PROFILES), None),
     *((o.name, o.default, f'{o.description}' + (f', {o.unit}' if o.unit else ''),
        None if o.low is None else (o.low, o.high)) for o in PROFILE_OPTIONS),
     ('rate', 100.0, 'publishing rate, Hz of the node clock', (0.0, 1e5)),

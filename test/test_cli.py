@@ -77,6 +77,26 @@ def test_console_script_is_installed():
     assert exe.returncode == 0 and 'simulate' in exe.stdout
 
 
+def test_plan_writes_csv_figure_and_summary(tmp_path, capsys):
+    out = tmp_path / 'plan.csv'
+    assert main(['plan', '--omega', '2', '--max-angular-acceleration', '3', '-o', str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == 't_s,omega_rad_s,omega_dot_rad_s2,u_m,v_m'
+    data = np.loadtxt(out, delimiter=',', skiprows=1)
+    assert data[0, 1] == 0 and data[-1, 1] == pytest.approx(2.0)
+    assert np.max(np.abs(data[:, 2])) <= 3.0 + 1e-9
+    assert np.max(np.hypot(data[:, 3], data[:, 4])) <= 3e-3
+    assert (tmp_path / 'plan.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+    summary = capsys.readouterr().out
+    assert 'duration' in summary and 'peak' in summary and 'residual' in summary
+
+
+def test_plan_refusal_is_a_clear_error(tmp_path, capsys):
+    assert main(['plan', '--omega', '2', '--deflection-limit', '0.002',
+                 '-o', str(tmp_path / 'p.csv')]) == 2
+    assert 'static deflection' in capsys.readouterr().err
+
+
 @pytest.mark.parametrize('argv, omega_end', [
     (['--profile', 'eq26', '--period', '3', '--omega-max', '1.5'], 0.0),
     (['--profile', 'constant', '--omega', '1.5'], 1.5),
@@ -108,6 +128,7 @@ def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
 
 
 def test_every_registered_profile_has_a_cli_test():
-    from rotrod_core.profiles import PROFILES
+    from rotrod_core.profiles import OPTION_PROFILES, PROFILES
     tested = {argv[1] for argv, _ in test_simulate_runs_every_profile.pytestmark[0].args[1]}
-    assert tested == set(PROFILES)
+    assert tested == set(OPTION_PROFILES)
+    assert set(PROFILES) - tested == {'spin_up'}        # made by `rotrod plan`, tested above

@@ -1,0 +1,234 @@
+"""plan_spin_up: checked against an independent integration and against simulate.
+
+The reference here is written from MODEL.md, apart from rotrod_core's code: the
+general deflection equations (k1, k2, rotating damping) integrated by DOP853 at
+rtol 1e-12, and the free whirl left at the end found from the eigenvectors of the
+constant-speed matrix (each complex pair moves the tip on an ellipse whose
+semi-major axis is |a + i b| + |a - i b|, a and b its u and v coefficients).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad, solve_ivp
+
+from rotrod_core import (
+    Eq26Profile,
+    RodParams,
+    SpinUpProfile,
+    make_profile,
+    plan_spin_up,
+    planner,
+    simulate,
+    whirl_residual,
+)
+
+TABLE1 = RodParams()
+RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)
+DAMPED = RodParams(damping_ratio=0.02)
+
+
+def coefficients(p):
+    m = p.mass
+    k1 = 3 * p.youngs_modulus * p.second_moment_radial / p.rod_length**3
+    k2 = 3 * p.youngs_modulus * p.second_moment_tangential / p.rod_length**3
+    c1, c2 = 2 * p.damping_ratio * math.sqrt(k1 * m), 2 * p.damping_ratio * math.sqrt(k2 * m)
+    return k1 / m, k2 / m, c1 / m, c2 / m, p.eccentricity
+
+
+def free_matrix(p, w):
+    """4x4 matrix of (u, v, u', v') at constant w and the forcing (MODEL.md)."""
+    a1, a2, g1, g2, r0 = coefficients(p)
+    A = np.array([[0, 0, 1, 0], [0, 0, 0, 1],
+                  [w * w - a1, 0, -g1, 2 * w], [0, w * w - a2, -2 * w, -g2]], float)
+    return A, np.array([0, 0, w * w * r0, 0.0])
+
+
+def static_state(p, w):
+    A, f = free_matrix(p, w)
+    return np.linalg.solve(A, -f)
+
+
+def residual_whirl(p, w, x):
+    """Sum of the semi-major axes of the free whirls of state x about the static one."""
+    A, _ = free_matrix(p, w)
+    lam, V = np.linalg.eig(A)
+    q = np.linalg.solve(V, np.asarray(x, float) - static_state(p, w))
+    total = 0.0
+    for i in np.flatnonzero(lam.imag > 0):
+        a, b = q[i] * V[0, i], q[i] * V[1, i]
+        total += abs(a + 1j * b) + abs(a - 1j * b)
+    return total
+
+
+def reference(p, profile, t_end, n=4001, x0=None):
+    """DOP853 rtol 1e-12 of the general equations; states on n times from 0 to t_end."""
+    a1, a2, g1, g2, r0 = coefficients(p)
+
+    def rhs(t, y):
+        u, v, du, dv = y
+        w, wd = float(profile.omega(t)), float(profile.omega_dot(t))
+        return [du, dv,
+                2 * w * dv + (w * w - a1) * u + w * w * r0 + wd * v - g1 * du,
+                -2 * w * du + (w * w - a2) * v - wd * (r0 + u) - g2 * dv]
+
+    t = np.linspace(0, t_end, n)
+    x0 = np.zeros(4) if x0 is None else x0
+    sol = solve_ivp(rhs, (0, t_end), x0, method='DOP853', rtol=1e-12, atol=1e-16, t_eval=t)
+    assert sol.success
+    return t, sol.y
+
+
+@pytest.fixture(scope='module')
+def nominal():
+    return plan_spin_up(TABLE1, 2.0)
+
+
+@pytest.fixture(scope='module')
+def robust():
+    return plan_spin_up(TABLE1, 2.0, robust=0.1, residual=1e-6)
+
+
+def test_nominal_meets_the_targets_by_an_independent_integration(nominal):
+    T = nominal.duration
+    assert isinstance(nominal, SpinUpProfile) and T <= 1.5
+    t, y = reference(TABLE1, nominal, T)
+    res = residual_whirl(TABLE1, 2.0, y[:, -1])
+    assert res <= 2.5e-7
+    assert nominal.residual_amplitude == pytest.approx(res, abs=2e-9)
+    peak = np.max(np.hypot(y[0], y[1]))
+    assert peak <= 3e-3
+    assert nominal.peak_deflection == pytest.approx(peak, abs=1e-8)
+
+
+def test_nominal_free_vibration_after_arrival_is_the_predicted_whirl(nominal):
+    """Against simulate: after T the tip circles the static deflection within the residual."""
+    T = nominal.duration
+    # T on the time grid: a step straddling the kink of w' at T costs simulate ~1e-9 m
+    run = simulate(TABLE1, nominal, T + 20.0, dt=T / 800)
+    assert np.max(np.hypot(run.u, run.v)) <= 3e-3
+    after = run.t >= T
+    us = static_state(TABLE1, 2.0)[0]
+    wobble = np.hypot(run.u[after] - us, run.v[after])
+    assert wobble.max() <= nominal.residual_amplitude * 1.01 + 1e-10
+    assert wobble.max() >= 0.5 * nominal.residual_amplitude
+    k = np.searchsorted(run.t, T)
+    state = (run.u[k], run.v[k], run.du[k], run.dv[k])
+    assert residual_whirl(TABLE1, 2.0, state) <= 2.5e-7
+    assert whirl_residual(TABLE1, 2.0, *state) == pytest.approx(
+        residual_whirl(TABLE1, 2.0, state), rel=1e-9)
+
+
+def test_profile_is_smooth_and_ends_at_rest(nominal):
+    p, T = nominal, nominal.duration
+    assert p.omega(0.0) == 0.0 and p.omega(T) == pytest.approx(2.0, abs=1e-12)
+    assert p.omega_dot(0.0) == pytest.approx(0, abs=1e-12)
+    assert p.omega_dot(T) == pytest.approx(0, abs=1e-12)
+    assert p.omega(T + 5) == 2.0 and p.omega_dot(T + 5) == 0.0 and p.omega(-1.0) == 0.0
+    t = np.linspace(-0.2, T + 0.2, 20001)
+    w, wd = p.omega(t), p.omega_dot(t)
+    h = t[1] - t[0]
+    assert np.max(np.abs(np.diff(w))) <= 1.01 * h * np.max(np.abs(wd))   # w continuous
+    wdd = np.max(np.abs(np.diff(wd))) / h       # w' continuous: bounded jumps per step
+    assert wdd * h < 0.01 * np.max(np.abs(wd))
+    for tk in np.linspace(0, T, 12):            # knots: no jump of w' either side
+        assert p.omega_dot(tk - 1e-9) == pytest.approx(p.omega_dot(tk + 1e-9), abs=1e-6)
+    assert p.angle(T + 1) == pytest.approx(quad(p.omega, 0, T, limit=200)[0] + 2.0, rel=1e-9)
+    assert p.max_angular_acceleration == pytest.approx(np.max(np.abs(wd)), rel=1e-4)
+
+
+def test_registry_rebuilds_the_plan_from_its_control_points(nominal):
+    again = make_profile('spin_up', duration=nominal.duration,
+                         control_points=nominal.control_points)
+    t = np.linspace(0, nominal.duration, 7)
+    assert np.array_equal(again.omega(t), nominal.omega(t))
+    with pytest.raises(ValueError, match='equal'):
+        SpinUpProfile(1.0, [0, 1, 2, 2])
+    with pytest.raises(ValueError, match='duration'):
+        SpinUpProfile(0.0, [0, 0, 2, 2])
+
+
+def test_robust_band_holds_the_residual_for_every_natural_frequency(robust):
+    T = robust.duration
+    assert T <= 4.0 and robust.band_residual <= 1e-6
+    assert robust.peak_deflection <= 3e-3
+    for scale in (0.9, 0.94, 1.0, 1.03, 1.07, 1.1):
+        p = TABLE1.replace(youngs_modulus=TABLE1.youngs_modulus * scale**2)
+        t, y = reference(p, robust, T, n=3)
+        assert residual_whirl(p, 2.0, y[:, -1]) <= 1e-6, scale
+    t, y = reference(TABLE1, robust, T)
+    assert np.max(np.hypot(y[0], y[1])) <= 3e-3
+
+
+def test_spin_down_from_the_static_deflection():
+    plan = plan_spin_up(TABLE1, 0.0, omega_start=2.0)
+    assert plan.omega(0.0) == 2.0 and plan.omega(plan.duration + 1) == 0.0
+    x0 = static_state(TABLE1, 2.0)
+    t, y = reference(TABLE1, plan, plan.duration, x0=x0)
+    assert residual_whirl(TABLE1, 0.0, y[:, -1]) <= 2.5e-7
+    assert np.max(np.hypot(y[0], y[1])) <= 3e-3
+    run = simulate(TABLE1, plan, plan.duration, dt=plan.duration / 800, initial={'u': x0[0]})
+    assert np.max(np.hypot(run.u, run.v)) <= 3e-3
+
+
+@pytest.mark.parametrize('params', [RECT, DAMPED], ids=['k1!=k2', 'damped'])
+def test_anisotropic_and_damped_rods(params):
+    plan = plan_spin_up(params, 2.0)
+    t, y = reference(params, plan, plan.duration)
+    res = residual_whirl(params, 2.0, y[:, -1])
+    assert res <= 2.5e-7
+    assert plan.residual_amplitude == pytest.approx(res, abs=2e-9)
+    assert np.max(np.hypot(y[0], y[1])) <= 3e-3
+    run = simulate(params, plan, plan.duration, dt=plan.duration / 800)
+    assert np.max(np.hypot(run.u, run.v)) <= 3e-3
+    assert whirl_residual(params, 2.0, run.u[-1], run.v[-1], run.du[-1], run.dv[-1]) <= 2.5e-7
+
+
+def test_max_angular_acceleration_is_honoured():
+    plan = plan_spin_up(TABLE1, 2.0, max_angular_acceleration=1.0)
+    t = np.linspace(0, plan.duration, 20001)
+    assert np.max(np.abs(plan.omega_dot(t))) <= 1.0 + 1e-9
+    assert plan.duration >= 2.0
+    _, y = reference(TABLE1, plan, plan.duration, n=3)
+    assert residual_whirl(TABLE1, 2.0, y[:, -1]) <= 2.5e-7
+
+
+def test_eq26_leaves_more_residual_than_the_plan(nominal):
+    eq26 = Eq26Profile()
+    _, y = reference(TABLE1, eq26, 15.0, n=3)
+    assert residual_whirl(TABLE1, 2.0, y[:, -1]) > nominal.residual_amplitude
+
+
+@pytest.mark.parametrize('kwargs, message', [
+    ({'deflection_limit': 0.002}, 'static deflection at omega_target'),
+    ({'omega_target': 12.5, 'deflection_limit': 1.0}, 'natural frequency'),
+    ({'omega_target': 11.0, 'robust': 0.1, 'deflection_limit': 1.0}, 'robust'),
+    ({'omega_target': -1.0}, 'omega_target'),
+    ({'omega_target': float('nan')}, 'omega_target'),
+    ({'omega_start': -2.0}, 'omega_start'),
+    ({'omega_target': 0.0}, 'nothing to plan'),
+    ({'deflection_limit': float('inf')}, 'deflection_limit'),
+    ({'deflection_limit': -0.003}, 'deflection_limit'),
+    ({'residual': 0.0}, 'residual'),
+    ({'robust': -0.1}, 'robust'),
+    ({'robust': 1.0}, 'robust'),
+    ({'max_angular_acceleration': -1.0}, 'max_angular_acceleration'),
+    ({'residual': 1e-12}, 'below what the planner resolves'),
+])
+def test_refusals_name_the_constraint(kwargs, message):
+    kwargs = {'omega_target': 2.0, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        plan_spin_up(TABLE1, **kwargs)
+
+
+def test_a_request_not_met_within_the_search_says_which_constraints(monkeypatch):
+    monkeypatch.setattr(planner, 'MAX_PERIODS', 3)      # 1.55 s: the robust plan needs 2.4
+    with pytest.raises(ValueError, match='no spin-up from 0 to 2 rad/s found within 1.55'
+                       '.*deflection_limit = 0.003 m, residual = 1e-06 m, robust = 0.1'):
+        plan_spin_up(TABLE1, 2.0, robust=0.1, residual=1e-6)
+
+
+def test_refuses_a_batch_of_parameters():
+    with pytest.raises(ValueError, match='batch'):
+        plan_spin_up(RodParams(eccentricity=[0.05, 0.1]), 2.0)
