@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -193,15 +194,14 @@ def cmd_plan(args) -> int:
 def cmd_demo(args) -> int:
     """The paper's Eq. 26 scenario through the ROS nodes (or offline), per-stage summary."""
     if not args.offline:
-        # the nodes' orchestration lives with the nodes (rotrod_ros); it runs them as
-        # processes and imports no ROS client library itself
-        from rotrod_ros import demo
-        try:
-            demo.run(args.output, speed=args.speed, real_time=args.real_time)
-        except demo.DemoError as exc:
-            print(f'rotrod demo: {exc}', file=sys.stderr)
-            return 1
-        return 0
+        # the nodes' orchestration lives with the nodes (rotrod_ros), which sit above the
+        # core: it runs as a process of its own, so the core imports nothing of them
+        command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output)]
+        if args.speed is not None:
+            command += ['--speed', repr(args.speed)]
+        if args.real_time:
+            command.append('--real-time')
+        return subprocess.call(command)
     params = RodParams()
     profile = Eq26Profile(period=15.0, omega_max=2.0)
     run = simulate(params, profile, 40.0, dt=1e-3)

@@ -13,6 +13,8 @@ DDS stays on this machine unless the caller set otherwise
 
 from __future__ import annotations
 
+import argparse
+import math
 import os
 import random
 import signal
@@ -196,9 +198,26 @@ def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
 
 
 def main(argv: list | None = None) -> int:
-    """``python -m rotrod_ros.demo`` (the same as ``rotrod demo``)."""
-    from rotrod_core.cli import main as cli_main
-    return cli_main(['demo', *(sys.argv[1:] if argv is None else argv)])
+    """``python -m rotrod_ros.demo``, which ``rotrod demo`` runs (exit 1 on a failure)."""
+    parser = argparse.ArgumentParser(
+        prog='rotrod demo', description="the paper's spin-up scenario through the ROS "
+                                        'nodes, to a Rerun recording, with a stage summary')
+    parser.add_argument('-o', '--output', default='out/rotrod.rrd',
+                        help='Rerun recording to write (default out/rotrod.rrd)')
+    parser.add_argument('--speed', type=float, default=None,
+                        help='real-time factor of the simulator (default 2, from '
+                             'config/demo.yaml)')
+    parser.add_argument('--real-time', action='store_true',
+                        help='run at wall-clock speed (no /clock)')
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
+        parser.error(f'--speed must be a finite number > 0, got {args.speed!r}')
+    try:
+        run(args.output, speed=args.speed, real_time=args.real_time)
+    except DemoError as exc:
+        print(f'rotrod demo: {exc}', file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == '__main__':
