@@ -10,6 +10,18 @@ I_AREA = math.pi * D**4 / 64
 K = 3 * E * I_AREA / L**3
 W0 = math.sqrt(K / M)
 
+# The real rig of config/real_rig.yaml (docs/real_rig.md), written out here: Table 1
+# upright under gravity G with a steel rod; the exact tip-load stiffness less the rod's
+# weight as a Rayleigh geometric stiffness, and one-mode Rayleigh-Ritz masses.
+G, STEEL = 9.81, 7850.0
+AREA = math.pi * D**2 / 4
+KAPPA = math.sqrt(M * G / (E * I_AREA))
+K_RIG = M * G / (math.tan(KAPPA * L) / KAPPA - L) - 3 / 8 * STEEL * AREA * G
+MODAL_MASS_RIG = M + 33 / 140 * STEEL * AREA * L
+ECCENTRIC_MASS_RIG = M + 3 / 8 * STEEL * AREA * L
+W0_RIG = math.sqrt(K_RIG / MODAL_MASS_RIG)
+LOAD_RADIUS_RIG = R0 * ECCENTRIC_MASS_RIG / MODAL_MASS_RIG
+
 
 def step_start(t, w, w0=W0, r0=R0):
     """Eq. 29: z = u + i v from rest in the rotating frame at constant w (< w0)."""

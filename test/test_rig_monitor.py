@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from node_probes import namespace, omega_publisher, stamp, start_simulator
-from reference import R0, K, M
+from reference import LOAD_RADIUS_RIG, STEEL, W0_RIG, G, K, M
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -19,19 +19,11 @@ from rotrod_core import RodParams, simulate
 from rotrod_core.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
 from rotrod_core.profiles import RampProfile
 
-G, RHO = 9.81, 7850.0
-AREA = math.pi * 0.003**2 / 4
-EI = 100e9 * math.pi * 0.003**4 / 64
-KAPPA = math.sqrt(M * G / EI)
-K_RIG = M * G / (math.tan(KAPPA * 0.3) / KAPPA - 0.3) - 3 / 8 * RHO * AREA * G
-MODAL = M + 33 / 140 * RHO * AREA * 0.3
-W0_RIG = math.sqrt(K_RIG / MODAL)
-LOAD_RADIUS = R0 * (M + 3 / 8 * RHO * AREA * 0.3) / MODAL
 FIELD = {name: i for i, (name, _) in enumerate(ESTIMATE_FIELDS)}
 
 
 def test_the_monitor_identifies_a_real_rig_offline_and_warns():
-    rig = RodParams(gravity=G, rod_density=RHO)
+    rig = RodParams(gravity=G, rod_density=STEEL)
     run = simulate(rig, RampProfile(2.0, 4.0, t_start=2.0), 14.0, dt=0.01)
     rng = np.random.default_rng(3)
     noise = 1e-5                                           # m, RMS |r| / 100 or so
@@ -52,7 +44,7 @@ def test_the_monitor_identifies_a_real_rig_offline_and_warns():
     est = monitor.estimate
     values = monitor.values(est)
     assert values[FIELD['natural_frequency']] == pytest.approx(W0_RIG, rel=1e-3)
-    assert values[FIELD['eccentricity']] == pytest.approx(LOAD_RADIUS, rel=1e-2)
+    assert values[FIELD['eccentricity']] == pytest.approx(LOAD_RADIUS_RIG, rel=1e-2)
     assert values[FIELD['stiffness']] == pytest.approx(W0_RIG**2 * M, rel=2e-3)
     assert values[FIELD['stiffness_deviation']] == pytest.approx(W0_RIG**2 * M / K - 1,
                                                                  abs=2e-3)

@@ -24,7 +24,7 @@ from node_probes import (
     stamp,
     start_simulator,
 )
-from reference import R0, W0, K, M
+from reference import ECCENTRIC_MASS_RIG, K_RIG, MODAL_MASS_RIG, R0, W0, W0_RIG, K, M
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -347,18 +347,10 @@ def test_the_real_rig_params_file_settles_at_its_softened_static_deflection(
     omega_publisher(ros_node, ns).publish(Float64(data=1.5))
     t_reached = obs.wait_for_omega(1.5)
     obs.wait_until(t_reached + 8.0)
-    # docs/real_rig.md, written out here: exact tip-load stiffness, the rod's weight as
-    # a Rayleigh geometric stiffness, one-mode Rayleigh-Ritz masses
-    g, rho = 9.81, 7850.0
-    area = math.pi * 0.003**2 / 4
-    ei = 100e9 * math.pi * 0.003**4 / 64
-    kappa = math.sqrt(M * g / ei)
-    k = M * g / (math.tan(kappa * 0.3) / kappa - 0.3) - 3 / 8 * rho * area * g
-    modal = M + 33 / 140 * rho * area * 0.3
-    eccentric = M + 3 / 8 * rho * area * 0.3
-    us = eccentric * 1.5**2 * R0 / (k - modal * 1.5**2)
+    # the real rig's closed forms (test/reference.py, docs/real_rig.md)
+    us = ECCENTRIC_MASS_RIG * 1.5**2 * R0 / (K_RIG - MODAL_MASS_RIG * 1.5**2)
     hold = obs.hold(t_reached + 1.0)
-    w0 = math.sqrt(k / modal)
+    w0 = W0_RIG
     t = hold[:, 0] - hold[0, 0]
     z = hold[:, 4] + 1j * hold[:, 5]
     basis = np.column_stack([np.ones_like(t), np.exp(1j * (w0 - 1.5) * t),
