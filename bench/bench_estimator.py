@@ -1,9 +1,9 @@
-"""Whirl-frequency estimators on the same windows: rotrod_core.whirl against baselines.
+"""Whirl-frequency estimators on the same windows: rotrod_core.estimation.whirl against baselines.
 
     .venv/bin/python bench/bench_estimator.py [--json FILE]
 
 Prints a Markdown table; ``measure()`` returns its rows (bench/results.py). Methods:
-the maximum-likelihood estimator of rotrod_core.whirl (ML), ESPRIT on the same 10 ms
+the maximum-likelihood estimator of rotrod_core.estimation.whirl (ML), ESPRIT on the same 10 ms
 block means after one difference (removes a constant offset exactly) and after five
 (removes a quartic drift, the ML estimator's drift model), and a plain interpolated FFT
 peak (linear trend removed, Hann window, parabolic interpolation of log |Z| on each
@@ -297,8 +297,8 @@ def main():
              f'{platform.python_implementation()} {platform.python_version()}), '
              f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC')
     print(f'whirl estimator benchmark on {stamp}\n')
-    print('Value: the ML estimator (rotrod_core.whirl); compared: the baselines on the same '
-          'windows.\n')
+    print('Value: the ML estimator (rotrod_core.estimation.whirl); '
+          'compared: the baselines on the same windows.\n')
     print(results.markdown(rows, bench_column=False))
     if args.json:
         results.dump(args.json, rows, stamp=stamp)

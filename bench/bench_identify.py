@@ -1,4 +1,5 @@
-"""Rig identification (rotrod_core.identify) on the upright rig's records, against targets.
+"""Rig identification (rotrod_core.estimation.identify) on the upright rig's records,
+against targets.
 
     .venv/bin/python bench/bench_identify.py [--seeds 50] [--json FILE]
 
@@ -46,13 +47,13 @@ from rotrod_core import (  # noqa: E402
     rig_cramer_rao,
     simulate,
 )
-from rotrod_core.identify import _modulating_start, _record  # noqa: E402
+from rotrod_core.estimation.identify import _modulating_start, _record  # noqa: E402
 
 K, M, R0 = 32.37, 0.3, 0.08
 W0 = math.sqrt(K / M)
 I_AREA = math.pi * 0.003**4 / 64
 RIG = RodParams(mass=M, youngs_modulus=K * 0.3**3 / (3 * I_AREA), eccentricity=R0)
-PROFILE = RampProfile(omega_max=2.0, ramp_time=4.0)
+PROFILE = RampProfile(omega_target=2.0, ramp_time=4.0)
 BENCH = 'identify'
 
 

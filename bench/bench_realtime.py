@@ -191,7 +191,7 @@ def fast_run(node, duration: float) -> dict:
 
 SLEEP_FLOOR = """
 import json, os, sys, threading, time
-from rotrod_ros.scheduling import CpuLatencyRequest
+from rotrod_core.live.scheduling import CpuLatencyRequest
 priority, duration, period = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
 latency = int(sys.argv[4])
 request = CpuLatencyRequest()

@@ -6,7 +6,12 @@ exact Lagrangian torque coupling, in SI units throughout. Public contract:
 ``critical_speed``, ``estimate_whirl_frequencies`` and the other names below.
 """
 
-from .analysis import (
+from rotrod_core.analysis.critical import (
+    critical_speed,
+    critical_speed_for_profile,
+    critical_speed_from,
+)
+from rotrod_core.analysis.modes import (
     CampbellDiagram,
     ModalAnalysis,
     Mode,
@@ -15,19 +20,8 @@ from .analysis import (
     modal_analysis,
     static_deflection,
 )
-from .batch import BatchResult, simulate_batch
-from .critical import critical_speed, critical_speed_for_profile, critical_speed_from
-from .identify import (
-    NotIdentifiable,
-    RigEstimate,
-    RigIdentifier,
-    identify_rig,
-    rig_cramer_rao,
-)
-from .model import State
-from .params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
-from .planner import plan_spin_up, whirl_residual
-from .profiles import (
+from rotrod_core.command.planner import plan_spin_up, whirl_residual
+from rotrod_core.command.profiles import (
     ConstantProfile,
     Eq26Profile,
     Profile,
@@ -38,10 +32,14 @@ from .profiles import (
     TableProfile,
     make_profile,
 )
-from .result import SimulationResult
-from .simulate import simulate
-from .stepper import NonFiniteStateError, RealTimeStepper
-from .whirl import (
+from rotrod_core.estimation.identify import (
+    NotIdentifiable,
+    RigEstimate,
+    RigIdentifier,
+    identify_rig,
+    rig_cramer_rao,
+)
+from rotrod_core.estimation.whirl import (
     Whirl,
     WhirlEstimate,
     WhirlEstimator,
@@ -49,6 +47,13 @@ from .whirl import (
     estimate_whirl,
     estimate_whirl_frequencies,
 )
+from rotrod_core.live.stepper import RealTimeStepper
+from rotrod_core.model.equations import State
+from rotrod_core.model.params import DEFAULT_HUB_INERTIA, RodParams, disk_inertia
+from rotrod_core.numerics.checks import NonFiniteStateError
+from rotrod_core.offline.batch import BatchResult, simulate_batch
+from rotrod_core.offline.result import SimulationResult
+from rotrod_core.offline.simulate import simulate
 
 __all__ = [
     'BatchResult', 'CampbellDiagram', 'ConstantProfile', 'DEFAULT_HUB_INERTIA',

@@ -20,14 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import dynamic_frequencies, modal_analysis, static_deflection
-from .critical import STARTS, critical_speed, critical_speed_for_profile
-from .model import COUPLINGS
-from .params import RodParams
-from .planner import plan_spin_up
-from .profiles import OPTION_PROFILES, PROFILE_OPTIONS, Eq26Profile, profile_from_options
-from .simulate import simulate
-from .stages import format_stage_table, stage_extremes
+from rotrod_core.analysis.critical import STARTS, critical_speed, critical_speed_for_profile
+from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
+from rotrod_core.analysis.stages import format_stage_table, stage_extremes
+from rotrod_core.command.planner import plan_spin_up
+from rotrod_core.command.profiles import (
+    OPTION_PROFILES,
+    PROFILE_OPTIONS,
+    Eq26Profile,
+    profile_from_options,
+)
+from rotrod_core.model.equations import COUPLINGS
+from rotrod_core.model.params import RodParams
+from rotrod_core.offline.simulate import simulate
 
 PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
                 'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness',
@@ -70,7 +75,7 @@ def _add_profile(p: argparse.ArgumentParser) -> None:
     g.add_argument('--profile', choices=OPTION_PROFILES, default='eq26')
     for o in PROFILE_OPTIONS:
         flags = ['--' + o.name.replace('_', '-')]
-        if o.name == 'omega_max':
+        if o.name == 'omega_target':
             flags.append('--omega')
         if o.name == 'table_file':
             g.add_argument('--table', '--table-file', dest='table_file', type=Path,
@@ -170,7 +175,7 @@ def cmd_plan(args) -> int:
     np.savetxt(args.output, np.c_[run.t, run.omega, run.omega_dot, run.u, run.v],
                delimiter=',', header=header, comments='', fmt='%.10g')
     figure = args.output.with_suffix('.png')
-    from .figures import require_matplotlib, spin_up_plan
+    from rotrod_core.reporting.figures import require_matplotlib, spin_up_plan
     try:
         require_matplotlib()
     except ImportError as exc:
@@ -179,7 +184,7 @@ def cmd_plan(args) -> int:
     if figure is not None:
         reference = reference_run = None
         if args.start == 0:
-            reference = Eq26Profile(period=15.0, omega_max=args.omega)
+            reference = Eq26Profile(period=15.0, omega_target=args.omega)
             reference_run = simulate(params, reference, 15.0, dt=0.01)
         spin_up_plan(plan, run, figure, reference, reference_run, args.deflection_limit)
     band = (f', band (1 +- {args.robust:g}) w0 residual {plan.band_residual:.3g} m'
@@ -203,7 +208,7 @@ def cmd_demo(args) -> int:
             command.append('--real-time')
         return subprocess.call(command)
     params = RodParams()
-    profile = Eq26Profile(period=15.0, omega_max=2.0)
+    profile = Eq26Profile(period=15.0, omega_target=2.0)
     run = simulate(params, profile, 40.0, dt=1e-3)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -220,7 +225,7 @@ def _command_line(args, name: str, extra: list) -> str:
 
 def cmd_reproduce(args) -> int:
     """The paper's Figs. 3-10, the fact report and the Eq. 26 recording, into --out."""
-    from .reproduce import reproduce
+    from rotrod_core.reporting.reproduce import reproduce
     extra = ['--no-recording'] if args.no_recording else []
     try:
         result = reproduce(args.out, recording=not args.no_recording,
@@ -237,7 +242,7 @@ def cmd_reproduce(args) -> int:
 
 def cmd_analyze(args) -> int:
     """Campbell diagrams, critical-speed maps and the coupling drift, into --out."""
-    from .analyze import PARTS, analyze
+    from rotrod_core.reporting.analyze import PARTS, analyze
     parts = tuple(args.only) if args.only else PARTS
     extra = ['--only', *parts] if args.only else []
     try:

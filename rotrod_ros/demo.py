@@ -25,10 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rotrod_core import RodParams, recording, simulate
-from rotrod_core.alignment import profile_delay
-from rotrod_core.profiles import Eq26Profile
-from rotrod_core.stages import format_stage_table, series_stage_extremes
+from rotrod_core import RodParams, simulate
+from rotrod_core.analysis.alignment import profile_delay
+from rotrod_core.analysis.stages import format_stage_table, series_stage_extremes
+from rotrod_core.command.profiles import Eq26Profile
+from rotrod_core.reporting import recording
 
 from .install import executable, share_file
 
@@ -130,7 +131,7 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     env = ros_environment(os.environ)
     cmds = node_commands(output, speed, real_time)
     factor = 1.0 if real_time else float(speed or 2.0)
-    profile = Eq26Profile(period=15.0, omega_max=2.0)
+    profile = Eq26Profile(period=15.0, omega_target=2.0)
     t_run = 40.0
     timeout = timeout or 60.0 + 3.0 * t_run / factor
     procs = Processes(output.parent / 'logs', env)

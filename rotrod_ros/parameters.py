@@ -2,7 +2,7 @@
 
 Each parameter is declared with a description that states its unit, a range where
 one applies, and whether it can change at run time. Values are validated as a whole
-(:func:`build_settings`): the physics through :class:`rotrod_core.engine.EngineConfig`,
+(:func:`build_settings`): the physics through :class:`rotrod_core.live.engine.EngineConfig`,
 the node's own rates here, so a combination that makes no sense is refused with a
 reason and nothing changes.
 """
@@ -15,11 +15,10 @@ from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-from rotrod_core.engine import DRIVES, EngineConfig
-from rotrod_core.model import COUPLINGS, STATE_FIELDS
-from rotrod_core.params import SECTIONS, RodParams
-
-from .scheduling import MAX_CPU_LATENCY
+from rotrod_core.live.engine import DRIVES, EngineConfig
+from rotrod_core.live.scheduling import MAX_CPU_LATENCY
+from rotrod_core.model.equations import COUPLINGS, STATE_FIELDS
+from rotrod_core.model.params import SECTIONS, RodParams
 
 EXECUTORS = ('single_threaded', 'events')
 MIN_ESTIMATE_SAMPLES = 20

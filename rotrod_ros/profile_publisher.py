@@ -10,8 +10,8 @@ matched it too), then streams for ``duration`` seconds (0: to the profile's end)
 start and end, and exits, unless ``loop`` (start over) or ``hold`` (keep publishing
 the last value) is set.
 
-Profiles (rotrod_core.profiles): eq26 (period, omega_max: docs/model.md's Eq. 26),
-constant (omega_max), step (omega_before -> omega_max at t_step), ramp (0 -> omega_max
+Profiles (rotrod_core.command.profiles): eq26 (period, omega_target: docs/model.md's Eq. 26),
+constant (omega_target), step (omega_start -> omega_target at t_step), ramp (0 -> omega_target
 over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
 f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).
 """
@@ -29,9 +29,15 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from rotrod_core.profiles import OPTION_PROFILES, PROFILE_OPTIONS, Profile, profile_from_options
+import rotrod_core.live.scheduling as scheduling
+from rotrod_core.command.profiles import (
+    OPTION_PROFILES,
+    PROFILE_OPTIONS,
+    Profile,
+    profile_from_options,
+)
 
-from . import node_main, scheduling
+from . import node_main
 from .node_main import ConfigurationError
 
 NODE_NAME = 'rotrod_profile_publisher'

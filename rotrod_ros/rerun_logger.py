@@ -30,7 +30,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from rotrod_core.recording import RecordingWriter
+from rotrod_core.reporting.recording import RecordingWriter
 
 from . import node_main
 from .messages import to_seconds

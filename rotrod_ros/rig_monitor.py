@@ -36,7 +36,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-from rotrod_core.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
+from rotrod_core.estimation.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
 
 from . import messages, node_main
 from .node_main import ConfigurationError

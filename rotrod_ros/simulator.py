@@ -58,14 +58,15 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import SetBool, Trigger
 
-from rotrod_core.engine import ERROR, CommandRejected, SimulationEngine
-from rotrod_core.geometry import rod_centerline, sphere_radius
-from rotrod_core.model import State
-from rotrod_core.whirl import WhirlEstimator
+import rotrod_core.live.scheduling as scheduling
+from rotrod_core.estimation.whirl import WhirlEstimator
+from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.live.pacing import Pacer, StampClock
+from rotrod_core.model.equations import State
+from rotrod_core.model.geometry import rod_centerline, sphere_radius
 
-from . import messages, node_main, scheduling
+from . import messages, node_main
 from .node_main import ConfigurationError
-from .pacing import Pacer, StampClock
 from .parameters import ALL_SPECS, SPECS_BY_NAME, build_settings, descriptor
 
 NODE_NAME = 'rotrod_simulator'

@@ -19,7 +19,7 @@ from rotrod_core import (
     simulate,
     static_deflection,
 )
-from rotrod_core.expm import expm_batch
+from rotrod_core.numerics.expm import expm_batch
 
 RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)
 

@@ -110,7 +110,7 @@ def test_plan_refusal_is_a_clear_error(tmp_path, capsys):
     (['--profile', 'table'], 1.0),
 ])
 def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
-    from rotrod_core.profiles import PROFILES
+    from rotrod_core.command.profiles import PROFILES
     table = tmp_path / 'w.csv'
     table.write_text('0,0\n2,1\n4,1\n')
     if argv[-1] == 'table':
@@ -128,7 +128,7 @@ def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
 
 
 def test_every_registered_profile_has_a_cli_test():
-    from rotrod_core.profiles import OPTION_PROFILES, PROFILES
+    from rotrod_core.command.profiles import OPTION_PROFILES, PROFILES
     tested = {argv[1] for argv, _ in test_simulate_runs_every_profile.pytestmark[0].args[1]}
     assert tested == set(OPTION_PROFILES)
     assert set(PROFILES) - tested == {'spin_up'}        # made by `rotrod plan`, tested above

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rotrod_core.command import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
+from rotrod_core.command.shaping import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
 
 T = 0.01
 

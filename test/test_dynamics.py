@@ -23,7 +23,7 @@ from rotrod_core import (
     simulate,
     simulate_batch,
 )
-from rotrod_core.model import Coefficients, State, omega_jump
+from rotrod_core.model.equations import Coefficients, State, omega_jump
 
 
 @pytest.fixture(scope='module')
@@ -187,7 +187,7 @@ def test_batch_torque_drive_conserves_invariants():
     J = np.array([0.01, 0.05, 0.2])
     b = simulate_batch(RodParams(hub_inertia=J), torque=0.0, t_end=10.0,
                        initial={'omega': 2.0, 'u': 1e-3})
-    from rotrod_core.model import angular_momentum
+    from rotrod_core.model.equations import angular_momentum
     co = Coefficients.from_params(RodParams(hub_inertia=J))
     s0 = State(1e-3, 0.0, 0.0, 0.0, 0.0, 2.0)
     assert np.allclose(angular_momentum(co, b.final), angular_momentum(co, s0), rtol=1e-10)

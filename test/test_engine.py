@@ -7,7 +7,7 @@ import pytest
 from reference import R0, W0, K, M
 
 from rotrod_core import Eq26Profile, RodParams, simulate
-from rotrod_core.engine import (
+from rotrod_core.live.engine import (
     ERROR,
     OK,
     WARN,
@@ -16,7 +16,7 @@ from rotrod_core.engine import (
     SimulationEngine,
     foreshortening,
 )
-from rotrod_core.stepper import NonFiniteStateError
+from rotrod_core.numerics.checks import NonFiniteStateError
 
 
 def hann_mean(x):

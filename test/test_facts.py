@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rotrod_core import RodParams, simulate
-from rotrod_core.facts import EQ26, stage_facts
-from rotrod_core.trajectory_fit import fit_whirls
+from rotrod_core.estimation.trajectory_fit import fit_whirls
+from rotrod_core.reporting.facts import EQ26, stage_facts
 
 
 def test_fit_recovers_a_centre_and_two_whirls():

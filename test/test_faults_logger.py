@@ -7,7 +7,7 @@ complete (``rerun rrd verify``).
 
 SIGKILL: the process gets no chance to write anything more, so the file has no footer
 and ``rerun rrd verify`` rejects it ("Missing RRD footer"). It still loads: rerun's
-``RrdReader(path).stream()`` reads every chunk written (``rotrod_core.recording``
+``RrdReader(path).stream()`` reads every chunk written (``rotrod_core.reporting.recording``
 reads through it), and ``rerun rrd optimize`` rewrites it into a verified file. Its
 data is contiguous from the start and ends at most ``flush_period`` (+ a margin for
 the executor) before the kill.
@@ -26,7 +26,7 @@ from node_probes import namespace, stamp
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 
-from rotrod_core import recording
+from rotrod_core.reporting import recording
 from rotrod_ros.install import executable
 
 # rerun warns on every read of a file without footer, which a killed one is by design
@@ -156,7 +156,7 @@ def test_sigkill_to_the_logger_leaves_a_loadable_file_up_to_the_last_flush(
 
 WRITE_THEN_KILL = """
 import os, signal, sys
-from rotrod_core.recording import RecordingWriter
+from rotrod_core.reporting.recording import RecordingWriter
 writer = RecordingWriter(sys.argv[1])
 for k in range(1000):
     t = k * 0.01

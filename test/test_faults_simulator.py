@@ -54,7 +54,7 @@ def this_checkout():
             first = f.readline().decode(errors='replace')
         interpreter = first[2:].split() if first.startswith('#!') else [sys.executable]
         out = subprocess.run(
-            [*interpreter, '-c', 'import rotrod_ros.simulator as s, rotrod_core.engine as e; '
+            [*interpreter, '-c', 'import rotrod_ros.simulator as s, rotrod_core.live.engine as e; '
              'print(s.__file__); print(e.__file__)'],
             capture_output=True, text=True, check=True, timeout=60)
         for path in out.stdout.split():
@@ -235,7 +235,7 @@ def test_a_10_khz_command_flood_keeps_the_physics_on_time_and_memory_flat(
 def start_ramp_publisher(ros_processes, ns):
     """The real profile_publisher: w = 0.25 t rad/s (0 -> 2 over 8 s) at 100 Hz."""
     return ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns, params={'profile': 'ramp', 'omega_max': 2.0, 'ramp_time': 8.0,
+        namespace=ns, params={'profile': 'ramp', 'omega_target': 2.0, 'ramp_time': 8.0,
                               'rate': 100.0}))
 
 

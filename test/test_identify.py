@@ -1,4 +1,4 @@
-"""Rig identification (rotrod_core.identify) against known parameters.
+"""Rig identification (rotrod_core.estimation.identify) against known parameters.
 
 Truth comes from the closed forms: w0 = sqrt(k/m) from the stiffness the rod is built
 with, the given r0 and zeta; the noise-free record at constant w is Eq. 29
@@ -26,7 +26,7 @@ K, M, R0 = 32.37, 0.3, 0.08
 W0 = math.sqrt(K / M)                       # closed form, 10.3875 rad/s
 I_AREA = math.pi * 0.003**4 / 64
 RIG = RodParams(mass=M, youngs_modulus=K * 0.3**3 / (3 * I_AREA), eccentricity=R0)
-RAMP = RampProfile(omega_max=2.0, ramp_time=4.0)
+RAMP = RampProfile(omega_target=2.0, ramp_time=4.0)
 
 
 @pytest.fixture(scope='module')

@@ -14,8 +14,9 @@ from ros_harness import ros_arguments
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64
 
-from rotrod_core import Eq26Profile, RodParams, recording, simulate
-from rotrod_core.alignment import profile_delay
+from rotrod_core import Eq26Profile, RodParams, simulate
+from rotrod_core.analysis.alignment import profile_delay
+from rotrod_core.reporting import recording
 from rotrod_ros.install import executable
 from rotrod_ros.profile_publisher import MATCH_SETTLE
 
@@ -64,7 +65,7 @@ def test_profile_publisher_follows_the_sim_clock(ros_processes, ros_node, reques
     ns = namespace(request)
     clock = ros_node.node.create_publisher(Clock, '/clock', 10)
     pub = ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns, params={'profile': 'ramp', 'omega_max': 1.0, 'ramp_time': 1.0,
+        namespace=ns, params={'profile': 'ramp', 'omega_target': 1.0, 'ramp_time': 1.0,
                               'rate': 20.0, 'use_sim_time': True}))
     got = ros_node.subscribe(f'{ns}/cmd/omega', Float64, qos=1000)
     sim = 1.0
@@ -92,10 +93,10 @@ def test_profile_publisher_follows_the_sim_clock(ros_processes, ros_node, reques
 def test_profile_publisher_holds_or_loops_when_asked(ros_processes, ros_node, request):
     ns = namespace(request)
     hold = ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns + '_hold', params={'profile': 'constant', 'omega_max': 0.7,
+        namespace=ns + '_hold', params={'profile': 'constant', 'omega_target': 0.7,
                                         'rate': 50.0, 'hold': True}))
     loop = ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns + '_loop', params={'profile': 'ramp', 'omega_max': 1.0,
+        namespace=ns + '_loop', params={'profile': 'ramp', 'omega_target': 1.0,
                                         'ramp_time': 0.2, 'rate': 50.0, 'loop': True}))
     held = ros_node.subscribe(f'{ns}_hold/cmd/omega', Float64, qos=1000)
     looped = ros_node.subscribe(f'{ns}_loop/cmd/omega', Float64, qos=1000)

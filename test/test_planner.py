@@ -19,10 +19,10 @@ from rotrod_core import (
     SpinUpProfile,
     make_profile,
     plan_spin_up,
-    planner,
     simulate,
     whirl_residual,
 )
+from rotrod_core.command import planner
 
 TABLE1 = RodParams()
 RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)

@@ -15,7 +15,7 @@ from rotrod_core import (
     make_profile,
 )
 
-PROFILES = [Eq26Profile(), Eq26Profile(period=4.0, omega_max=-1.5), ConstantProfile(1.3),
+PROFILES = [Eq26Profile(), Eq26Profile(period=4.0, omega_target=-1.5), ConstantProfile(1.3),
             StepProfile(2.0, t_step=1.0), RampProfile(2.0, 3.0, t_start=0.5),
             TableProfile([0, 1, 2.5, 4], [0, 1.0, 1.5, 0.2]),
             SineSweepProfile(0.3, 0.5, 3.0, duration=5.5, offset=1.0),
@@ -97,7 +97,7 @@ def test_table_from_csv(tmp_path):
 
 @pytest.mark.parametrize('make', [
     lambda: Eq26Profile(period=0), lambda: Eq26Profile(period=-1),
-    lambda: Eq26Profile(omega_max=math.nan), lambda: ConstantProfile(math.inf),
+    lambda: Eq26Profile(omega_target=math.nan), lambda: ConstantProfile(math.inf),
     lambda: StepProfile(2.0, t_step=-1), lambda: RampProfile(2.0, ramp_time=0),
     lambda: TableProfile([0, 1], [0]), lambda: TableProfile([0, 0], [0, 1]),
     lambda: TableProfile([1, 0], [0, 1]), lambda: TableProfile([0, 1], [0, math.nan]),

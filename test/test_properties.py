@@ -3,8 +3,8 @@
 The common contract of rotrod_core, checked here with hypothesis over the parameters,
 the profiles, the real-time stepper and engine, the setpoint shaper, the whirl
 estimator and the constant-rotation analysis: every call either raises a clear
-ValueError (a :class:`~rotrod_core.engine.CommandRejected` for a refused command, a
-:class:`~rotrod_core.stepper.NonFiniteStateError` for a step that would overflow; both
+ValueError (a :class:`~rotrod_core.live.engine.CommandRejected` for a refused command, a
+:class:`~rotrod_core.numerics.checks.NonFiniteStateError` for a step that would overflow; both
 keep the previous state), or returns finite numbers. Never NaN or +-inf where a number
 is promised, never a ZeroDivisionError, OverflowError or TypeError from the arithmetic.
 
@@ -40,8 +40,8 @@ from rotrod_core import (
     simulate,
     static_deflection,
 )
-from rotrod_core.command import OmegaSetpointShaper
-from rotrod_core.engine import (
+from rotrod_core.command.shaping import OmegaSetpointShaper
+from rotrod_core.live.engine import (
     ERROR,
     MAX_DEFLECTION_RATIO,
     STEP_RESOLUTION,
@@ -50,9 +50,10 @@ from rotrod_core.engine import (
     SimulationEngine,
     fastest_rate,
 )
-from rotrod_core.model import Coefficients
-from rotrod_core.simulate import time_grid
-from rotrod_core.stepper import NonFiniteStateError, RealTimeStepper
+from rotrod_core.live.stepper import RealTimeStepper
+from rotrod_core.model.equations import Coefficients
+from rotrod_core.numerics.checks import NonFiniteStateError
+from rotrod_core.offline.simulate import time_grid
 
 PROPS = settings(derandomize=True, database=None, deadline=None, print_blob=False,
                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
@@ -228,11 +229,11 @@ def test_a_batch_with_one_unusable_system_is_refused(masses, diameter):
 # -- profiles -------------------------------------------------------------------------
 
 PROFILE_FIELDS = {
-    Eq26Profile: {'period': st.floats(0.1, 100.0), 'omega_max': st.floats(-50.0, 50.0)},
-    ConstantProfile: {'omega_value': st.floats(-50.0, 50.0)},
-    StepProfile: {'omega_after': st.floats(-50.0, 50.0), 't_step': st.floats(0.0, 100.0),
-                  'omega_before': st.floats(-50.0, 50.0)},
-    RampProfile: {'omega_max': st.floats(-50.0, 50.0), 'ramp_time': st.floats(0.01, 100.0),
+    Eq26Profile: {'period': st.floats(0.1, 100.0), 'omega_target': st.floats(-50.0, 50.0)},
+    ConstantProfile: {'omega_target': st.floats(-50.0, 50.0)},
+    StepProfile: {'omega_target': st.floats(-50.0, 50.0), 't_step': st.floats(0.0, 100.0),
+                  'omega_start': st.floats(-50.0, 50.0)},
+    RampProfile: {'omega_target': st.floats(-50.0, 50.0), 'ramp_time': st.floats(0.01, 100.0),
                   't_start': st.floats(0.0, 100.0)},
     SineSweepProfile: {'amplitude': st.floats(-5.0, 5.0), 'f_start': st.floats(0.0, 20.0),
                        'f_end': st.floats(0.0, 20.0), 'duration': st.floats(0.1, 100.0),
@@ -361,7 +362,7 @@ def test_a_non_finite_or_non_numeric_time_is_a_clear_error(spec, t, method, as_a
 def test_eq26_is_continuous_and_its_acceleration_is_bounded_by_2w_over_t(T, W, a, b):
     """Eq. 26: |w'| <= 2|W|/T everywhere and w is Lipschitz with that constant; w stays
     between 0 and W."""
-    p = Eq26Profile(period=T, omega_max=W)
+    p = Eq26Profile(period=T, omega_target=W)
     bound = 2 * abs(W) / T
     t1, t2 = a * T * 7 / 3, b * T * 7 / 3
     w1, w2 = p.omega(t1), p.omega(t2)
@@ -375,7 +376,7 @@ def test_eq26_is_continuous_and_its_acceleration_is_bounded_by_2w_over_t(T, W, a
 
 def test_regression_profiles_whose_slope_or_phase_overflows_are_refused():
     for make in (lambda: Eq26Profile(period=1e-320), lambda: Eq26Profile(period=TINY,
-                                                                         omega_max=0.0),
+                                                                         omega_target=0.0),
                  lambda: RampProfile(ramp_time=1e-320),
                  lambda: RampProfile(t_start=HUGE, ramp_time=HUGE),
                  lambda: SineSweepProfile(f_end=1e300, duration=1e10),
@@ -389,7 +390,7 @@ def test_regression_profiles_whose_slope_or_phase_overflows_are_refused():
 
 @props(60)
 @given(st.one_of(st.text(max_size=5), st.sampled_from(['eq26', 'ramp', 'table'])),
-       st.dictionaries(st.sampled_from(['period', 'omega_max', 'bogus', 'times']),
+       st.dictionaries(st.sampled_from(['period', 'omega_target', 'bogus', 'times']),
                        anything(st.floats(0.1, 10.0)), max_size=3))
 def test_make_profile_raises_value_error_only(name, kwargs):
     try:

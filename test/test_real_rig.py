@@ -13,10 +13,10 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from rotrod_core import Eq26Profile, RealTimeStepper, RodParams, simulate, simulate_batch
-from rotrod_core.analysis import dynamic_frequencies, modal_analysis, static_deflection
-from rotrod_core.critical import critical_speed, step_response
-from rotrod_core.engine import EngineConfig, SimulationEngine
-from rotrod_core.model import Coefficients, angular_momentum, energy
+from rotrod_core.analysis.critical import critical_speed, step_response
+from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
+from rotrod_core.live.engine import EngineConfig, SimulationEngine
+from rotrod_core.model.equations import Coefficients, angular_momentum, energy
 
 # Table 1
 M_TIP, L_ROD, D_ROD, E_MOD, R0 = 0.3, 0.3, 0.003, 100e9, 0.1
@@ -455,8 +455,8 @@ def test_energy_function_is_the_lagrangian_energy_for_any_state():
 
 
 def test_the_reproduction_report_puts_the_real_rig_beside_the_paper():
-    from rotrod_core import report
-    from rotrod_core.rig_comparison import real_rig, summarize
+    from rotrod_core.reporting import report
+    from rotrod_core.reporting.rig_comparison import real_rig, summarize
     paper_rig = RodParams()
     rig = real_rig(paper_rig)
     assert (rig.gravity, rig.rod_density) == (G, STEEL)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from rotrod_core import recording
-from rotrod_core.recording import RecordingWriter
+from rotrod_core.reporting import recording
+from rotrod_core.reporting.recording import RecordingWriter
 
 
 def test_an_armed_writer_keeps_only_the_pretrigger_seconds_then_records_everything(tmp_path):

@@ -20,8 +20,8 @@ import pytest
 from PIL import Image
 from reference import R0, W0, M
 
-from rotrod_core import recording
 from rotrod_core.cli import main
+from rotrod_core.reporting import recording
 from rotrod_ros.install import executable
 
 ROOT = Path(__file__).resolve().parent.parent

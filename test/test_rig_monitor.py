@@ -16,8 +16,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
 
 from rotrod_core import RodParams, simulate
-from rotrod_core.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
-from rotrod_core.profiles import RampProfile
+from rotrod_core.command.profiles import RampProfile
+from rotrod_core.estimation.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
 
 FIELD = {name: i for i, (name, _) in enumerate(ESTIMATE_FIELDS)}
 

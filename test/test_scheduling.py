@@ -1,4 +1,4 @@
-"""Real-time scheduling of the physics thread (rotrod_ros/scheduling.py), checked
+"""Real-time scheduling of the physics thread (rotrod_core/live/scheduling.py), checked
 through the kernel's own view of each thread's policy."""
 
 import os
@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from rotrod_ros import scheduling
+from rotrod_core.live import scheduling
 
 ROOT = os.geteuid() == 0
 NOBODY = 65534
@@ -48,7 +48,7 @@ def test_fifo_applies_to_the_calling_thread_only_and_can_be_undone():
 def test_without_privilege_it_is_refused_with_a_reason_and_nothing_changes():
     # the interpreter lives under /root: drop to nobody after it has started
     code = ('import os, resource, sys\n'
-            'from rotrod_ros import scheduling as s\n'
+            'from rotrod_core.live import scheduling as s\n'
             'resource.setrlimit(resource.RLIMIT_RTPRIO, (0, 0))\n'
             f'os.setgroups([]); os.setgid({NOBODY}); os.setuid({NOBODY})\n'
             'r = s.set_current_thread_priority(50)\n'
@@ -110,7 +110,7 @@ def test_a_cpu_latency_request_holds_until_released_or_the_process_ends():
     assert scheduling.cpu_latency_limit() == before and request.microseconds is None
     request.release()                              # twice: nothing to do
     # a process killed while holding one: the kernel ends its request
-    code = ('import sys, time\nfrom rotrod_ros import scheduling as s\n'
+    code = ('import sys, time\nfrom rotrod_core.live import scheduling as s\n'
             'r = s.CpuLatencyRequest(); assert r.hold(0) is None\n'
             'print("held", flush=True); time.sleep(60)\n')
     child = subprocess.Popen([sys.executable, '-c', code], stdout=subprocess.PIPE, text=True,
@@ -134,7 +134,7 @@ def test_a_cpu_latency_request_that_cannot_be_made_says_why_and_holds_nothing(tm
 
 @pytest.mark.skipif(not ROOT, reason='dropping to an unprivileged user needs root')
 def test_without_privilege_a_cpu_latency_request_is_refused():
-    code = ('import os\nfrom rotrod_ros import scheduling as s\n'
+    code = ('import os\nfrom rotrod_core.live import scheduling as s\n'
             f'os.setgroups([]); os.setgid({NOBODY}); os.setuid({NOBODY})\n'
             'r = s.CpuLatencyRequest(); print(r.hold(0)); print(r.microseconds)\n')
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,

@@ -27,7 +27,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import SetBool, Trigger
 
 from rotrod_core import Eq26Profile, RodParams, simulate
-from rotrod_ros import scheduling
+from rotrod_core.live import scheduling
 
 pytestmark = pytest.mark.ros
 

@@ -10,11 +10,11 @@ import yaml
 from reference import R0, D, E, L, M
 
 from rotrod_core import RodParams
-from rotrod_core.engine import EngineConfig
-from rotrod_core.geometry import cantilever_shape, rod_centerline, sphere_radius
-from rotrod_core.model import Coefficients, inertial_position
+from rotrod_core.live.engine import EngineConfig
+from rotrod_core.live.pacing import Pacer, StampClock
+from rotrod_core.model.equations import Coefficients, inertial_position
+from rotrod_core.model.geometry import cantilever_shape, rod_centerline, sphere_radius
 from rotrod_ros import messages
-from rotrod_ros.pacing import Pacer, StampClock
 from rotrod_ros.parameters import (
     ALL_SPECS,
     ROD_SPECS,

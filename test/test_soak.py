@@ -45,7 +45,7 @@ from node_probes import rss as vm_rss
 from ros_harness import ros_arguments
 from sensor_msgs.msg import JointState
 
-from rotrod_core import recording
+from rotrod_core.reporting import recording
 
 SOAK_SECONDS = float(os.environ.get('ROTROD_SOAK_SECONDS', 600))
 WARMUP = min(60.0, SOAK_SECONDS / 5)
@@ -85,7 +85,7 @@ def test_soak_at_1khz_memory_and_simulated_time_hold(ros_processes, ros_node, re
         namespace=ns, params={'output': str(out)}))
     logger.wait_for_output('recording to', timeout=30)
     ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns, params={'profile': 'eq26', 'omega_max': OMEGA_MAX, 'loop': True}))
+        namespace=ns, params={'profile': 'eq26', 'omega_target': OMEGA_MAX, 'loop': True}))
     ros_node.spin_until(lambda: len(joint) > 10, 30, 'joint states')
     logger.wait_for_output('receiving: first joint state', timeout=30)
 

@@ -166,7 +166,7 @@ def test_a_ramp_past_the_criterion_then_a_hold_is_an_error_and_runs_on(
     sim = start_simulator(ros_processes, ns, real_time_factor=FAST)
     obs = Observer(ros_node, ns)
     ramp = ros_processes.start_console_script('profile_publisher', *ros_arguments(
-        namespace=ns, params={'profile': 'ramp', 'omega_max': 2.5, 'ramp_time': 8.0,
+        namespace=ns, params={'profile': 'ramp', 'omega_target': 2.5, 'ramp_time': 8.0,
                               'hold': True, 'use_sim_time': True}), name='ramp')
     t_reached = obs.wait_for_omega(2.5, timeout=40)
     obs.wait_until(t_reached + 10.0)

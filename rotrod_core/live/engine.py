@@ -1,0 +1,675 @@
+"""A live simulation session: one rod, its drive, command shaping, limits and health.
+
+:class:`SimulationEngine` is what a real-time front end (the ROS simulator node)
+drives: it owns a :class:`~rotrod_core.live.stepper.RealTimeStepper`, takes timestamped
+commands (angular-velocity setpoints or hub torques), advances in whole fixed steps
+on its own simulated clock and reports its health. The paper's critical deflection
+(``deflection_limit``, 3 mm) is a criterion it reports (health ERROR while the tip is
+beyond it), not a wall: the simulation goes on. It halts, keeping the last good state,
+only where the model stops meaning anything: a non-finite state, a deflection beyond
+the small-deflection bound ``max_deflection_ratio`` x rod length, or |w| beyond the
+``max_omega`` the integration step was sized for.
+:class:`EngineConfig` holds everything that can be configured, validated as a whole
+so that a combination that makes no physical sense is refused with a reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import rotrod_core.model.equations as model
+from rotrod_core.analysis.critical import critical_speed
+from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, tangential_bending
+from rotrod_core.command.shaping import OmegaSetpointShaper
+from rotrod_core.live.stepper import RealTimeStepper
+from rotrod_core.model.equations import (
+    STATE_FIELDS,
+    State,
+    check_coupling,
+    check_rotary_inertia,
+    make_state,
+)
+from rotrod_core.model.params import RodParams
+from rotrod_core.numerics.checks import NonFiniteStateError, finite_number
+
+DRIVES = ('velocity', 'torque')
+
+OK, WARN, ERROR = 0, 1, 2
+"""Health levels (the values of diagnostic_msgs/DiagnosticStatus)."""
+
+STEP_RESOLUTION = 0.5
+"""Largest dt x |lambda| allowed for the fastest deflection mode (RK4 phase error
+per radian of that mode ~ (dt |lambda|)^4 / 120, here below 0.06 %)."""
+
+
+MAX_DEFLECTION_RATIO = 0.1
+"""Default model-validity bound on |r| / l (tip deflection over rod length).
+
+The model is linear (small-deflection Euler-Bernoulli): it keeps the mass at the rod's
+height and the tip stiffness at 3 E I / l^3 whatever the deflection. On the static
+cantilever shape phi = (3 xi^2 - xi^3) / 2 a tip deflection delta shortens the rod's
+height by (1/2) integral of (delta phi')^2 dx = 0.6 delta^2 / l, so its relative
+foreshortening is 0.6 (delta / l)^2: 0.6 % at delta = 0.1 l (see
+:func:`foreshortening`), the order of the neglected geometric terms. Beyond that
+the linear model is no longer a small-deflection model; the simulation halts there."""
+
+FORESHORTENING_FACTOR = 0.6
+"""Height lost by a cantilever's tip per (deflection^2 / length), 1: integral over the
+static shape of (1/2) phi'(x)^2 dx times l, = 3/5."""
+
+
+def foreshortening(deflection_ratio):
+    """Relative drop of the tip's height, dz / l, at a tip deflection ``delta / l`` (1).
+
+    Second order in the deflection on the static cantilever shape: 0.6 (delta / l)^2.
+    """
+    return FORESHORTENING_FACTOR * np.square(deflection_ratio)
+
+
+TIMEOUT_DELAYS = 2.0
+"""Shortest command_timeout, in units of setpoint_delay: the delay plus two stream
+intervals, since setpoint_delay is at least two intervals."""
+
+
+class CommandRejected(ValueError):
+    """A command was refused (reason in the message); the simulation is unchanged."""
+
+
+def fastest_rate(params: RodParams, max_omega: float) -> float:
+    """Bound on |lambda| (rad/s) of the deflection modes for |w| <= ``max_omega`` (rad/s).
+
+    In the rotating frame the modes are the rod's own (|lambda| <= wn max(1, 2 zeta))
+    shifted by at most |w|.
+    """
+    wn = max(params.natural_frequency_radial, params.natural_frequency_tangential)
+    return float(wn * max(1.0, 2.0 * float(params.damping_ratio)) + abs(max_omega))
+
+
+@dataclass(frozen=True)
+class EngineConfig:
+    """Configuration of a :class:`SimulationEngine` (SI units), validated on creation.
+
+    Attributes:
+        params: the rod (one system).
+        drive: ``'velocity'`` (w follows setpoints) or ``'torque'`` (free rotation).
+        coupling: ``'exact'`` or ``'paper'`` (see :mod:`rotrod_core.model.equations`).
+        physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
+        max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
+            The hub's angular acceleration bends the rod backwards: quasi-statically
+            v = -w' r0 Me / k2 (Me = m for a massless rod; 0.68 mm per rad/s^2 for
+            Table 1), up to twice that when w' is applied suddenly. A bound whose
+            quasi-static bending alone exceeds the validity bound
+            (``max_deflection_ratio`` x l) is refused.
+        max_omega: largest |w| accepted as a setpoint, and reached in torque drive
+            before the simulation halts, rad/s. The step is sized for it (see
+            ``physics_rate``), so beyond it the integration is not trusted.
+        max_torque: largest |Q| accepted as a torque command, N m.
+        deflection_limit: the critical deflection, m (the paper's 3 mm, the
+            criterion behind its critical speed): while |r| = sqrt(u^2 + v^2) is
+            beyond it, health is ERROR ("beyond the critical deflection"), naming
+            when the tip first crossed it and the peak so far; the simulation goes
+            on and accepts commands.
+        warn_fraction: fraction of ``deflection_limit`` above which health is WARN.
+        max_deflection_ratio: model-validity bound on |r| / l: beyond it the
+            simulation halts at the last good state until a reset (0 = no bound).
+            Default :data:`MAX_DEFLECTION_RATIO` (0.1: 30 mm for Table 1).
+        critical_margin: relative distance to a critical speed within which health
+            is WARN (0.05 = within 5 %).
+        setpoint_delay: lag of the shaped w behind the setpoint stream, s (at least
+            two stream intervals); delivery jitter up to the lag minus one interval
+            does not reach w (see :class:`~rotrod_core.command.shaping.OmegaSetpointShaper`).
+        initial: initial state by name (u, v, du, dv, theta, omega), as
+            ``(name, value)`` pairs or a dict; others zero. Used at start and reset.
+        command_timeout: simulated seconds without an accepted command on the active
+            drive's input after which the hub is stopped (0 = off): velocity drive
+            ramps w to 0 at ``max_angular_acceleration``, torque drive sets the hub
+            torque to 0 (free coast); health is WARN until a command comes. Off, w
+            holds the last setpoint and the torque stays. When on, it must be at
+            least :data:`TIMEOUT_DELAYS` x ``setpoint_delay`` (the delay plus at least
+            two stream intervals, since the delay is at least two): a normal stream
+            never trips it. See :meth:`SimulationEngine.step`.
+    """
+
+    params: RodParams = field(default_factory=RodParams)
+    drive: str = 'velocity'
+    coupling: str = 'exact'
+    physics_rate: float = 1000.0
+    max_angular_acceleration: float = 0.5
+    max_omega: float = 50.0
+    max_torque: float = 100.0
+    deflection_limit: float = 0.003
+    warn_fraction: float = 0.8
+    max_deflection_ratio: float = MAX_DEFLECTION_RATIO
+    critical_margin: float = 0.05
+    setpoint_delay: float = 0.05
+    initial: tuple = ()
+    command_timeout: float = 0.0
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        if not isinstance(self.params, RodParams):
+            raise ValueError(f'params must be RodParams, got {self.params!r}')
+        if self.params.is_batch:
+            raise ValueError('the engine simulates one system; got a batch of RodParams')
+        if self.drive not in DRIVES:
+            raise ValueError(f'drive must be one of {DRIVES}, got {self.drive!r}')
+        check_coupling(self.params, self.coupling)
+        for name in ('physics_rate', 'max_angular_acceleration', 'max_omega', 'max_torque',
+                     'deflection_limit', 'warn_fraction'):
+            set_(self, name, finite_number(name, getattr(self, name), positive=True))
+        for name in ('critical_margin', 'max_deflection_ratio'):
+            set_(self, name, finite_number(name, getattr(self, name), nonnegative=True))
+        if self.max_deflection_ratio > 1:
+            raise ValueError(f'max_deflection_ratio must be in [0, 1] (|r| / rod length; '
+                             f'0 = no bound), got {self.max_deflection_ratio!r}')
+        if self.warn_fraction > 1:
+            raise ValueError(f'warn_fraction must be in (0, 1], got {self.warn_fraction!r}')
+        if not 0 < finite_number('setpoint_delay', self.setpoint_delay) <= 10:
+            raise ValueError(f'setpoint_delay must be in (0, 10] s, got '
+                             f'{self.setpoint_delay!r}')
+        timeout = finite_number('command_timeout', self.command_timeout, nonnegative=True)
+        set_(self, 'command_timeout', timeout)
+        if 0 < timeout < TIMEOUT_DELAYS * self.setpoint_delay:
+            raise ValueError(
+                f'command_timeout {timeout:g} s is shorter than {TIMEOUT_DELAYS:g} x '
+                f'setpoint_delay ({TIMEOUT_DELAYS * self.setpoint_delay:g} s): a setpoint '
+                'is reached setpoint_delay after it arrives and the next one is due '
+                'within two stream intervals of that, so a normal stream would trip it '
+                '(0 turns the timeout off)')
+        if self.critical_margin >= 1:
+            raise ValueError(f'critical_margin must be in [0, 1), got {self.critical_margin!r}')
+        rate = fastest_rate(self.params, self.max_omega)
+        needed = rate / STEP_RESOLUTION
+        if self.physics_rate < needed:
+            raise ValueError(
+                f'physics_rate {self.physics_rate:g} Hz is too low for this rod: the fastest '
+                f'deflection mode at |w| <= max_omega ({self.max_omega:g} rad/s) reaches '
+                f'{rate:.4g} rad/s, so RK4 needs physics_rate >= {needed:.4g} Hz '
+                f'(or a lower max_omega)')
+        bend = tangential_bending(self.params, self.max_angular_acceleration)
+        if bend > self.max_deflection:
+            raise ValueError(
+                f'max_angular_acceleration {self.max_angular_acceleration:g} rad/s^2 bends the '
+                f'rod tangentially by {bend * 1e3:.3g} mm (quasi-static w\' r0 Me / k2), beyond '
+                f'the model\'s validity bound {self.max_deflection * 1e3:.3g} mm '
+                f'(max_deflection_ratio {self.max_deflection_ratio:g} x rod length): every '
+                'ramp at that rate would halt the simulation')
+        # the setpoint shaper's own limits (e.g. the largest change of w in a stall),
+        # refused here with its reason rather than when the engine starts
+        OmegaSetpointShaper(self.max_angular_acceleration, delay=self.setpoint_delay)
+        try:
+            initial = dict(self.initial)
+        except (TypeError, ValueError):
+            raise ValueError(f'initial must be (name, value) pairs or a dict, got '
+                             f'{self.initial!r}') from None
+        state = make_state(initial, scalar=True)
+        set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
+        if self.drive == 'torque':
+            check_rotary_inertia(self.params, self.coupling, state)
+        if abs(state.omega) > self.max_omega:
+            raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
+                             f'{self.max_omega:g} rad/s')
+        r = math.hypot(state.u, state.v)
+        if r > self.max_deflection:
+            raise ValueError(f'initial deflection {r:g} m exceeds the model\'s validity bound '
+                             f'{self.max_deflection:g} m (max_deflection_ratio '
+                             f'{self.max_deflection_ratio:g} x rod length)')
+        co = model.Coefficients.from_params(self.params)
+        if not (math.isfinite(model.energy(co, state))
+                and math.isfinite(model.angular_momentum(co, state))):
+            raise ValueError(f'the energy or angular momentum of the initial state {state} '
+                             'overflows')
+
+    @property
+    def dt(self) -> float:
+        """Integration step, s."""
+        return 1.0 / self.physics_rate
+
+    @property
+    def max_deflection(self) -> float:
+        """Validity bound on |r|, m: ``max_deflection_ratio`` x rod length (inf: none)."""
+        if not self.max_deflection_ratio:
+            return math.inf
+        return self.max_deflection_ratio * float(self.params.rod_length)
+
+    @property
+    def initial_state(self) -> State:
+        """The initial state as a :class:`State`."""
+        return make_state(dict(self.initial), scalar=True)
+
+    def replace(self, **changes) -> EngineConfig:
+        """A validated copy with some fields changed; RodParams fields go to ``params``."""
+        rod = {k: changes.pop(k) for k in list(changes) if k in _ROD_FIELDS}
+        if rod:
+            changes['params'] = (changes.get('params') or self.params).replace(**rod)
+        return dataclasses.replace(self, **changes)
+
+
+_ROD_FIELDS = {f.name for f in dataclasses.fields(RodParams)}
+
+
+@dataclass(frozen=True)
+class Health:
+    """The session's health: ``level`` (OK, WARN, ERROR), a message, named values."""
+
+    level: int
+    message: str
+    values: tuple = ()
+
+
+class SimulationEngine:
+    """One rod simulated in fixed steps on its own clock, driven by timestamped commands.
+
+    The simulated clock :attr:`time` (s) starts at 0 and only moves forward (a reset
+    returns the state, not the clock, to the start). Commands may carry a time ``at``
+    (s, not before :attr:`time`): they take effect then, so a front end that advances
+    in batches of steps still applies each command at the instant it arrived.
+    """
+
+    def __init__(self, config: EngineConfig | None = None):
+        self.config = config if config is not None else EngineConfig()
+        self._origin = 0.0
+        self._steps = 0
+        self._stepper = self._make_stepper(self.config, self.config.initial_state)
+        self.halted: str | None = None
+        self._reset_watch()
+        self.rejected_commands = 0
+        self.accepted_commands = 0
+        self.timeouts = 0
+        """Number of command-timeout events so far (see :attr:`timed_out_at`)."""
+        self._reset_commands()
+        self._cache_limits()
+
+    # ----------------------------------------------------------------- construction
+    @staticmethod
+    def _make_stepper(config: EngineConfig, state: State) -> RealTimeStepper:
+        stepper = RealTimeStepper(config.params, config.dt, config.coupling)
+        stepper.set_state(**state._asdict())
+        return stepper
+
+    def _reset_watch(self) -> None:
+        """Forget crossings of the critical deflection and the peak (start and reset)."""
+        self.peak_deflection = self.deflection
+        """Largest |r| since the start or the last reset, m."""
+        self.peak_deflection_at = self.time
+        """Simulated time of :attr:`peak_deflection`, s."""
+        self.first_crossed_at: float | None = None
+        """When |r| first went beyond ``deflection_limit`` since the start or reset, s."""
+        self.beyond_limit_since: float | None = None
+        """Start of the current excursion beyond ``deflection_limit`` (None: within), s."""
+        self.limit_crossings = 0
+        """Excursions beyond ``deflection_limit`` since the start or the last reset."""
+        self._watch_deflection(self.deflection)
+
+    def _reset_commands(self) -> None:
+        cfg = self.config
+        self._shaper = OmegaSetpointShaper(cfg.max_angular_acceleration,
+                                           delay=cfg.setpoint_delay,
+                                           omega=self.state.omega, time=self.time)
+        self._torque_schedule: deque = deque()
+        self.torque_command = 0.0
+        st = self._stepper
+        self._torque = (0.0 if cfg.drive == 'torque' else
+                        float(model.hub_torque(st.coefficients, st.state, 0.0, st.coupling)))
+        self._omega_dot = 0.0
+        self._restart_timer()
+
+    def _restart_timer(self) -> None:
+        """The command timeout counts from now; a timeout event in course ends."""
+        self._last_command = self.time
+        self.timed_out_at: float | None = None
+
+    def _cache_limits(self) -> None:
+        p, cfg = self.config.params, self.config
+        self.critical_speeds = {
+            'deflection_limit': float(critical_speed(p, cfg.deflection_limit)),
+            'radial_natural_frequency': float(p.natural_frequency_radial),
+            'tangential_natural_frequency': float(p.natural_frequency_tangential),
+        }
+        self._always_stable = bool(p.is_isotropic and not float(p.damping_ratio) > 0)
+        self._stability: dict = {}
+        self._frequencies: dict = {}
+
+    # ----------------------------------------------------------------- state
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self._origin + self._steps * self.config.dt
+
+    @property
+    def dt(self) -> float:
+        """Integration step, s."""
+        return self.config.dt
+
+    @property
+    def state(self) -> State:
+        """Current state (u, v, du, dv, theta, omega), SI units."""
+        return self._stepper.state
+
+    @property
+    def torque(self) -> float:
+        """Hub torque, N m.
+
+        The applied torque in torque drive; in velocity drive, the torque the drive
+        must supply to impose w'.
+        """
+        return self._torque
+
+    @property
+    def omega_dot(self) -> float:
+        """Hub angular acceleration over the last step, rad/s^2."""
+        return self._omega_dot
+
+    @property
+    def setpoint(self) -> float:
+        """Latest accepted angular-velocity setpoint, rad/s (velocity drive)."""
+        return self._shaper.setpoint
+
+    @property
+    def command_age(self) -> float:
+        """Simulated time since the latest accepted command (or the timer's restart), s."""
+        return max(0.0, self.time - self._last_command)
+
+    @property
+    def deflection(self) -> float:
+        """|r| = sqrt(u^2 + v^2) of the mass, m."""
+        s = self.state
+        return math.hypot(s.u, s.v)
+
+    def inertial_position(self) -> tuple:
+        """Position (x, y, z) of the mass in the inertial frame, m (z = rod length)."""
+        x, y = self._stepper.inertial_position()
+        return x, y, float(self.config.params.rod_length)
+
+    def energy(self) -> float:
+        """Total mechanical energy, J."""
+        return self._stepper.energy()
+
+    def angular_momentum(self) -> float:
+        """Angular momentum about the axis, kg m^2/s."""
+        return self._stepper.angular_momentum()
+
+    def frequencies(self) -> tuple:
+        """Dynamic frequencies (f1, f2) in Hz at the current w (Eq. 28 or eigen analysis)."""
+        w = self.state.omega
+        f = self._frequencies.get(w)
+        if f is None:
+            if len(self._frequencies) > 64:
+                self._frequencies.clear()
+            f = self._frequencies[w] = dynamic_frequencies(self.config.params, w)
+        return f
+
+    # ----------------------------------------------------------------- commands
+    def _command_time(self, at) -> float:
+        try:
+            t = self.time if at is None else finite_number('command time', at)
+        except ValueError as exc:
+            self._reject(str(exc))
+        return max(t, self.time, self._shaper.last_command_time)
+
+    def _reject(self, reason: str):
+        self.rejected_commands += 1
+        raise CommandRejected(reason)
+
+    def _check_command(self, name: str, value, drive: str, limit: float, unit: str) -> float:
+        try:
+            x = finite_number(name, value)
+        except ValueError as exc:
+            self._reject(str(exc))
+        if abs(x) > limit:
+            self._reject(f'{name} {x:g} {unit} exceeds the limit {limit:g} {unit}')
+        if self.config.drive != drive:
+            self._reject(f'{name} ignored: drive is {self.config.drive!r} '
+                         f'(set drive to {drive!r} to use it)')
+        if self.halted:
+            self._reject(f'{name} ignored: simulation halted ({self.halted}); reset first')
+        return x
+
+    def command_omega(self, setpoint, at=None) -> None:
+        """Angular-velocity setpoint (rad/s) from time ``at`` (s) on; velocity drive."""
+        w = self._check_command('omega setpoint', setpoint, 'velocity',
+                                self.config.max_omega, 'rad/s')
+        t = self._command_time(at)
+        try:
+            self._shaper.command(w, t)
+        except ValueError as exc:       # beyond what the shaper can represent
+            self._reject(str(exc))
+        self._accepted(t)
+
+    def command_torque(self, torque, at=None) -> None:
+        """Hub torque (N m) from time ``at`` (s) on; torque drive."""
+        q = self._check_command('torque', torque, 'torque', self.config.max_torque, 'N m')
+        t = self._command_time(at)
+        if self._torque_schedule and self._torque_schedule[-1][0] > t:
+            t = self._torque_schedule[-1][0]
+        self._torque_schedule.append((t, q))
+        self._accepted(t)
+
+    def _accepted(self, t: float) -> None:
+        """A command taking effect at time ``t`` was accepted: it restarts the timeout."""
+        self._last_command = max(self._last_command, t)
+        self.timed_out_at = None
+        self.accepted_commands += 1
+
+    def _check_timeout(self, t0: float, dt: float) -> None:
+        """Start a timeout event if the command timeout runs out in the step from ``t0``.
+
+        Velocity drive: w ramps to 0 at the acceleration limit from the instant the
+        timeout runs out (through the setpoint shaper, so w is continuous and |w'|
+        bounded). Torque drive: the torque is 0 from this step on (commands apply at
+        step instants too).
+        """
+        timeout = self.config.command_timeout
+        if not timeout or self.timed_out_at is not None:
+            return
+        deadline = self._last_command + timeout
+        if self.config.drive == 'velocity':
+            if deadline > t0 + dt:
+                return
+            self.timed_out_at = max(deadline, t0)
+            self._shaper.ramp_to(0.0, self.timed_out_at)
+        else:
+            if deadline > t0 + 0.5 * dt:
+                return
+            self.timed_out_at = t0
+            self.torque_command = 0.0
+        self.timeouts += 1
+
+    # ----------------------------------------------------------------- stepping
+    def step(self) -> bool:
+        """Advance one step; False (and no change) if halted or the step was refused."""
+        if self.halted:
+            return False
+        stepper, cfg, dt = self._stepper, self.config, self.config.dt
+        before = stepper.state
+        t0 = self.time
+        self._check_timeout(t0, dt)
+        try:
+            if cfg.drive == 'velocity':
+                omega_dot = (self._shaper.omega(t0 + dt) - before.omega) / dt
+                state = stepper.step_velocity(omega_dot)
+            else:
+                while self._torque_schedule and self._torque_schedule[0][0] <= t0 + 0.5 * dt:
+                    self.torque_command = self._torque_schedule.popleft()[1]
+                state = stepper.step_torque(self.torque_command)
+        except NonFiniteStateError:
+            self.halted = f'non-finite state at t = {t0 + dt:.6f} s'
+            return False
+        r = math.hypot(state.u, state.v)
+        problem = None
+        if r > cfg.max_deflection:
+            problem = (f'deflection {r * 1e3:.4g} mm beyond the model\'s validity bound '
+                       f'{cfg.max_deflection * 1e3:.4g} mm (max_deflection_ratio '
+                       f'{cfg.max_deflection_ratio:g} x rod length; small-deflection model) '
+                       f'at t = {t0 + dt:.4f} s')
+        elif abs(state.omega) > cfg.max_omega:
+            problem = (f'|omega| {abs(state.omega):.4g} rad/s beyond max_omega '
+                       f'{cfg.max_omega:.4g} rad/s at t = {t0 + dt:.4f} s')
+        if problem:
+            stepper.set_state(**before._asdict())
+            self.halted = problem + '; halted at the last good state'
+            return False
+        self._steps += 1
+        self._watch_deflection(r)
+        self._torque = stepper.torque
+        self._omega_dot = stepper.omega_dot
+        if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
+            self._shaper.forget_before(self.time)
+        return True
+
+    def _watch_deflection(self, r: float) -> None:
+        """Follow the critical-deflection criterion: crossings, and the peak so far."""
+        if r > self.peak_deflection:
+            self.peak_deflection, self.peak_deflection_at = r, self.time
+        if r > self.config.deflection_limit:
+            if self.beyond_limit_since is None:
+                self.beyond_limit_since = self.time
+                self.limit_crossings += 1
+                if self.first_crossed_at is None:
+                    self.first_crossed_at = self.time
+        else:
+            self.beyond_limit_since = None
+
+    def advance(self, steps: int) -> int:
+        """Take up to ``steps`` steps (fewer if halted); return how many were taken."""
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)):
+            raise ValueError(f'steps must be a whole number, got {steps!r}')
+        done = 0
+        while done < steps and self.step():
+            done += 1
+        return done
+
+    def steps_until(self, t: float) -> int:
+        """Number of whole steps from :attr:`time` to reach time ``t`` (s), >= 0."""
+        n = (finite_number('t', t) - self.time) / self.config.dt + 1e-9
+        if not math.isfinite(n):
+            raise ValueError(f't = {t!r} s is too many steps of {self.config.dt:g} s away')
+        return max(0, math.floor(n))
+
+    def advance_to(self, t: float) -> int:
+        """Take the whole steps that do not pass time ``t`` (s); return how many."""
+        return self.advance(self.steps_until(t))
+
+    # ----------------------------------------------------------------- control
+    def reset(self) -> None:
+        """Back to the configured initial state (clock keeps running); clears a halt."""
+        self._stepper.set_state(**self.config.initial_state._asdict())
+        self.halted = None
+        self._reset_commands()
+        self._reset_watch()
+
+    def reconfigure(self, config: EngineConfig) -> None:
+        """Switch to ``config`` (already validated), keeping the state and the clock.
+
+        A change of drive starts the new drive from the current motion: velocity
+        drive holds the current w, torque drive starts with zero torque. A change of
+        drive, ``max_angular_acceleration``, ``setpoint_delay`` or ``command_timeout``
+        restarts the command timeout and ends a timeout event in course (velocity
+        drive then holds the w reached; torque drive keeps zero torque). A new
+        ``deflection_limit`` judges the current deflection against it at once; a
+        validity bound below the current deflection halts the next step.
+        """
+        if not isinstance(config, EngineConfig):
+            raise ValueError(f'config must be an EngineConfig, got {config!r}')
+        state = self.state
+        time = self.time
+        stepper = self._make_stepper(config, state)
+        old = self.config
+        self.config, self._stepper = config, stepper
+        self._origin, self._steps = time, 0
+        if (config.drive != old.drive
+                or config.max_angular_acceleration != old.max_angular_acceleration
+                or config.setpoint_delay != old.setpoint_delay):
+            self._reset_commands()
+        elif config.command_timeout != old.command_timeout:
+            if self.timed_out_at is not None and config.drive == 'velocity':
+                self._shaper.ramp_to(self._shaper.omega(time), time)    # hold w here
+            self._restart_timer()
+        if config.deflection_limit != old.deflection_limit:
+            self._watch_deflection(self.deflection)     # an excursion is judged anew
+        self._cache_limits()
+
+    # ----------------------------------------------------------------- health
+    def stable_at(self, omega: float) -> bool:
+        """Whether the free vibration at constant ``omega`` (rad/s) decays or persists."""
+        if self._always_stable:
+            return True
+        stable = self._stability.get(omega)
+        if stable is None:
+            if len(self._stability) > 64:
+                self._stability.clear()
+            stable = self._stability[omega] = modal_analysis(self.config.params, omega).stable
+        return stable
+
+    def health(self) -> Health:
+        """The session's health level and its reason.
+
+        ERROR when halted, or while the deflection is beyond ``deflection_limit`` (the
+        critical deflection: the simulation goes on); WARN when the deflection is
+        above ``warn_fraction`` of it, |w| is near a critical speed, w is in an
+        unstable range, or the command timeout has run out (until a command comes);
+        else OK. Whatever the level, every other reason is in the message too.
+        """
+        cfg, s = self.config, self.state
+        r = self.deflection
+        w = abs(s.omega)
+        values = (('time_s', self.time), ('omega_rad_s', s.omega), ('u_m', s.u), ('v_m', s.v),
+                  ('deflection_m', r), ('deflection_limit_m', cfg.deflection_limit),
+                  ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
+                  ('coupling', cfg.coupling),
+                  *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
+                  ('accepted_commands', self.accepted_commands),
+                  ('rejected_commands', self.rejected_commands),
+                  ('command_timeout_s', cfg.command_timeout),
+                  ('command_age_s', self.command_age), ('command_timeouts', self.timeouts),
+                  ('peak_deflection_m', self.peak_deflection),
+                  ('peak_deflection_time_s', self.peak_deflection_at),
+                  ('critical_deflection_first_crossed_s',
+                   'never' if self.first_crossed_at is None else self.first_crossed_at),
+                  ('critical_deflection_crossings', self.limit_crossings),
+                  ('max_deflection_m', cfg.max_deflection))
+        if self.halted:
+            return Health(ERROR, self.halted, values)
+        errors, warnings = [], []
+        if self.beyond_limit_since is not None:
+            errors.append(
+                f'deflection {r * 1e3:.4g} mm beyond the critical deflection '
+                f'{cfg.deflection_limit * 1e3:.4g} mm (deflection_limit) since '
+                f't = {self.beyond_limit_since:.3f} s; first crossed at '
+                f't = {self.first_crossed_at:.3f} s, peak {self.peak_deflection * 1e3:.4g} mm '
+                f'at t = {self.peak_deflection_at:.3f} s; still running')
+        if self.timed_out_at is not None:
+            if cfg.drive == 'torque':
+                action = 'hub torque 0, coasting'
+            elif self._shaper.target_reached_at > self.time:
+                action = 'spinning down'
+            else:
+                action = 'spun down, at rest'
+            warnings.append(f'no command for {self.command_age:.3g} s (command_timeout '
+                            f'{cfg.command_timeout:g} s): {action}')
+        if r > cfg.warn_fraction * cfg.deflection_limit and not errors:
+            warnings.append(f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
+                            f'the {cfg.deflection_limit * 1e3:.3g} mm limit')
+        for name, wc in self.critical_speeds.items():
+            if abs(w - wc) <= cfg.critical_margin * wc:
+                warnings.append(f'|omega| {w:.4g} rad/s within {cfg.critical_margin:.0%} of '
+                                f'the critical speed {wc:.4g} rad/s '
+                                f'({name.replace("_", " ")})')
+        if not self.stable_at(s.omega):
+            warnings.append(f'omega {s.omega:.4g} rad/s is in an unstable range: '
+                            'the free vibration grows')
+        if errors:
+            return Health(ERROR, '; '.join(errors + warnings), values)
+        if warnings:
+            return Health(WARN, '; '.join(warnings), values)
+        return Health(OK, 'running', values)
+
+
+__all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health',
+           'MAX_DEFLECTION_RATIO', 'OK', 'foreshortening',
+           'STATE_FIELDS', 'SimulationEngine', 'WARN', 'fastest_rate']
