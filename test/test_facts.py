@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rotrod_core import RodParams, simulate
-from rotrod_core.estimation.trajectory_fit import fit_whirls
+from rotrod_core.estimation.whirl import fit_whirls
 from rotrod_core.reporting.facts import EQ26, stage_facts
 
 

@@ -1,7 +1,7 @@
 """Estimation from motion.
 
-- whirl: whirl frequencies and amplitudes (maximum likelihood)
-- trajectory_fit: a two-whirl fit of a whole record
+- whirl: whirl frequencies and amplitudes by maximum likelihood, over a sliding
+  window (WhirlEstimator) or a whole record (fit_whirls)
 - identify: rig stiffness, mass and eccentricity from motion
 - monitor: the rig monitor, online identification
 """

@@ -651,6 +651,110 @@ def _fitted_estimate(data, cfg, window, poles, common):
     return estimate, lost, poles
 
 
+# -- a whole record ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class WhirlFit:
+    """The fitted motion z(t) = centre + forward e^{i wf t} + backward e^{-i wb t}.
+
+    Attributes:
+        centre: c, m (complex: u + i v).
+        forward: a, m (complex amplitude at t = 0 of the fitted samples' time origin).
+        backward: b, m.
+        forward_omega: wf, rad/s (>= 0).
+        backward_omega: wb, rad/s (>= 0).
+        residual: root-mean-square of |z - fit|, m.
+        forward_decay, backward_decay: decay rates of the whirls, 1/s (> 0: decays;
+            0 for a steady whirl).
+    """
+
+    centre: complex
+    forward: complex
+    backward: complex
+    forward_omega: float
+    backward_omega: float
+    residual: float
+    forward_decay: float = 0.0
+    backward_decay: float = 0.0
+
+    @property
+    def forward_frequency(self) -> float:
+        """Wf / 2pi, Hz."""
+        return self.forward_omega / TWO_PI
+
+    @property
+    def backward_frequency(self) -> float:
+        """Wb / 2pi, Hz."""
+        return self.backward_omega / TWO_PI
+
+    @property
+    def semi_major(self) -> float:
+        """Semi-major axis |a| + |b| of the ellipse, m."""
+        return abs(self.forward) + abs(self.backward)
+
+    @property
+    def semi_minor(self) -> float:
+        """Semi-minor axis ||a| - |b|| of the ellipse, m."""
+        return abs(abs(self.forward) - abs(self.backward))
+
+    @property
+    def precession_rate(self) -> float:
+        """Rate at which the ellipse's major axis turns, (wf - wb) / 2, rad/s."""
+        return 0.5 * (self.forward_omega - self.backward_omega)
+
+    @property
+    def relative_residual(self) -> float:
+        """Residual over the semi-major axis (0 for a perfect fit)."""
+        return self.residual / self.semi_major if self.semi_major else math.inf
+
+
+def fit_whirls(t, u, v, guess: tuple | None = None) -> WhirlFit:
+    """A whole record (t s, u m, v m) fitted as a centre plus two whirls.
+
+    The same least-squares fit as the estimator's (variable projection over the two
+    poles, :func:`_fit`), on every sample (no blocks) and with a constant centre: for
+    a record of free motion at constant w, such as a hold of a simulated run. The
+    model is z(t) = c + a exp(s_f (t - t0)) + b exp(s_b (t - t0)), t0 = t[0], with
+    s_f = -decay_f + i wf and s_b = -decay_b - i wb.
+
+    Args:
+        t: sample times, s, strictly increasing.
+        u, v: the motion, m.
+        guess: starting (wf, wb) in rad/s; by default the estimator's start values
+            (the strongest whirl of each sign in the spectrum).
+
+    Raises ValueError for unusable samples, fewer than 8, or a record without a
+    whirl of each sign.
+    """
+    t, z = _samples(t, u, v)
+    if len(t) < 8:
+        raise ValueError('fit_whirls needs at least 8 samples')
+    data = _Blocks(t, z, 1, 0)
+    window = 2.0 * data.half_span
+    if guess is None:
+        dt = data.dt
+        cfg = WhirlSettings(drift_degree=0, max_frequency=0.5 / dt, min_cycles=2.0)
+        poles = _start_values(_Grid(data.grid, data.grid_tau, 0), dt, cfg, window)
+    else:
+        wf, wb = (finite_number('guess', x) for x in guess)
+        poles = [1j * wf, -1j * wb]
+    signs = sorted(np.sign(np.imag(poles)))
+    if len(poles) != 2 or signs != [-1.0, 1.0]:
+        raise ValueError('fit_whirls: the record does not hold a whirl of each sign')
+    fit = _fit(data, poles, 0, window, tolerance=1e-13, covariance=False)
+    forward, backward = (0, 1) if fit.s[0].imag > 0 else (1, 0)
+    if not fit.s[forward].imag > 0 > fit.s[backward].imag:
+        raise ValueError('fit_whirls: the fit did not keep a whirl of each sign')
+    at_start = fit.amplitudes * np.exp(fit.s * (t[0] - data.t_centre))
+    return WhirlFit(centre=complex(fit.drift[0]), forward=complex(at_start[forward]),
+                    backward=complex(at_start[backward]),
+                    forward_omega=float(fit.s[forward].imag),
+                    backward_omega=float(-fit.s[backward].imag),
+                    residual=float(np.sqrt(np.mean(np.abs(fit.residual) ** 2))),
+                    forward_decay=float(-fit.s[forward].real),
+                    backward_decay=float(-fit.s[backward].real))
+
+
 # -- online --------------------------------------------------------------------------
 
 class WhirlEstimator:

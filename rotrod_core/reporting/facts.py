@@ -6,7 +6,7 @@ speed falls with eccentricity (Fig. 10, 3.0 mm limit) and give a torque equation
 (Eq. 23). Each :class:`Fact` holds the paper's claim, the paper's number where it gives
 one, the closed form of docs/model.md where there is one, the value measured now (from
 :func:`~rotrod_core.offline.simulate.simulate`, the eigen analysis and the fits of
-:mod:`~rotrod_core.estimation.trajectory_fit`; never typed in) and a verdict decided by a stated
+:func:`~rotrod_core.estimation.whirl.fit_whirls`; never typed in) and a verdict decided by a stated
 criterion. SI units inside; the text shows mm, um, Hz and rad/s as labelled.
 """
 
@@ -21,7 +21,7 @@ from rotrod_core.analysis.critical import critical_speed, critical_speed_for_pro
 from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
 from rotrod_core.analysis.stages import stage_extremes
 from rotrod_core.command.profiles import ConstantProfile, Eq26Profile
-from rotrod_core.estimation.trajectory_fit import fit_whirls
+from rotrod_core.estimation.whirl import fit_whirls
 from rotrod_core.model.params import RodParams
 from rotrod_core.offline.result import SimulationResult
 from rotrod_core.offline.simulate import simulate
