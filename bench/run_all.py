@@ -1,19 +1,19 @@
-"""Run every benchmark, print one Markdown table, and regenerate README's copy of it.
+"""Run every benchmark, print one Markdown table, and write it into docs/performance.md.
 
     .venv/bin/python bench/run_all.py                 # full run (60 s real-time part);
-                                                      # rewrites README.md's table
-    .venv/bin/python bench/run_all.py --quick         # smoke run (5 s); README untouched
+                                                      # rewrites docs/performance.md's table
+    .venv/bin/python bench/run_all.py --quick         # smoke run (5 s); the page untouched
     .venv/bin/python bench/run_all.py --quick --write # ... and written anyway
-    .venv/bin/python bench/run_all.py --no-write      # full run, README untouched
+    .venv/bin/python bench/run_all.py --no-write      # full run, docs/performance.md untouched
 
 Runs bench_core.py, bench_estimator.py and bench_realtime.py one after the other, each
 as its own process writing its rows as JSON (bench/results.py); their own tables go to
 stderr. The combined table, stamped with the date, the machine, the load average at
 start, the code measured and this command, goes to stdout and replaces what lies
-between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in README.md; nothing
+between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in docs/performance.md; nothing
 outside the markers is touched. A bench that fails, or a row with a missing value,
-stops the run before README is written. Exit status: 0 when every target is met,
-1 when some target is not (README is still written), 2 on an error.
+stops the run before docs/performance.md is written. Exit status: 0 when every target is met,
+1 when some target is not (docs/performance.md is still written), 2 on an error.
 """
 
 from __future__ import annotations
@@ -87,8 +87,8 @@ def package_versions() -> str:
     return ', '.join(out)
 
 
-def code_version(readme: Path | None = None) -> str:
-    """The commit measured, and the files changed since (README, which we write, aside)."""
+def code_version(page: Path | None = None) -> str:
+    """The commit measured, and the files changed since (the page we write aside)."""
     try:
         git = ['git', '-C', str(ROOT)]
         head = subprocess.run([*git, 'rev-parse', '--short', 'HEAD'], capture_output=True,
@@ -99,14 +99,14 @@ def code_version(readme: Path | None = None) -> str:
                                 capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         return 'not a git checkout'
-    skip = (readme or ROOT / 'README.md').resolve()
+    skip = (page or ROOT / 'docs' / 'performance.md').resolve()
     changed = [line[3:] for line in status.splitlines()
                if (ROOT / line[3:]).resolve() != skip]
     return (f'commit {head} ({branch})'
             + (f', with uncommitted changes to {", ".join(changed)}' if changed else ''))
 
 
-def machine_stamp(command: str, load: tuple, readme: Path | None = None) -> dict:
+def machine_stamp(command: str, load: tuple, page: Path | None = None) -> dict:
     """What the block is stamped with (``run time`` is filled in at the end)."""
     return {
         'date': f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC',
@@ -117,7 +117,7 @@ def machine_stamp(command: str, load: tuple, readme: Path | None = None) -> dict
         'Python': f'{platform.python_implementation()} {platform.python_version()}',
         'packages': package_versions(),
         'load average at start': ', '.join(f'{x:.2f}' for x in load) + ' (1, 5, 15 min)',
-        'code': code_version(readme),
+        'code': code_version(page),
     }
 
 
@@ -252,16 +252,17 @@ def main(argv: list | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--quick', action='store_true',
-                    help='smoke run: 1000-system batch, 5 s real-time run; README is not '
+                    help='smoke run: 1000-system batch, 5 s real-time run; the page is not '
                          'written unless --write')
     ap.add_argument('--duration', type=float,
                     help='real-time run, s (default 60, or 5 with --quick)')
     write = ap.add_mutually_exclusive_group()
     write.add_argument('--write', action='store_true', default=None,
-                       help='rewrite README (the default for a full run)')
+                       help='rewrite docs/performance.md (the default for a full run)')
     write.add_argument('--no-write', dest='write', action='store_false',
-                       help='do not rewrite README')
-    ap.add_argument('--readme', type=Path, default=ROOT / 'README.md')
+                       help='do not rewrite docs/performance.md')
+    ap.add_argument('--page', type=Path, default=ROOT / 'docs' / 'performance.md',
+                    help='the page whose generated block is rewritten')
     ap.add_argument('--json', type=Path, help='also write all rows and the stamp as JSON')
     args = ap.parse_args(argv)
     duration = args.duration if args.duration is not None else (5.0 if args.quick else 60.0)
@@ -269,9 +270,9 @@ def main(argv: list | None = None) -> int:
 
     t_start = time.monotonic()
     stamp = machine_stamp(f'.venv/bin/python {shlex.join(["bench/run_all.py", *argv])}',
-                          os.getloadavg(), args.readme)
+                          os.getloadavg(), args.page)
     if do_write:
-        rewrite(args.readme.read_text(), '')      # markers checked before an hour's work
+        rewrite(args.page.read_text(), '')      # markers checked before an hour's work
     rows, notes, loads = [], [], []
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
@@ -301,8 +302,8 @@ def main(argv: list | None = None) -> int:
                                          'rows': [results.to_dict(r) for r in rows]},
                                         indent=1))
     if do_write:
-        rewrite_file(args.readme, block)
-        print(f'run_all: rewrote the block in {args.readme}', file=sys.stderr)
+        rewrite_file(args.page, block)
+        print(f'run_all: rewrote the block in {args.page}', file=sys.stderr)
     return 1 if any(r.met is False for r in rows) else 0
 
 

@@ -1,4 +1,4 @@
-"""bench/run_all.py without running the benches: README rewriting and the table builder."""
+"""bench/run_all.py without running the benches: rewriting docs/performance.md, the table."""
 
 import importlib.util
 import math
@@ -48,7 +48,7 @@ def stamp():
 
 def test_readme_block_is_rewritten_in_place(tmp_path):
     readme = tmp_path / 'README.md'
-    shutil.copy(ROOT / 'README.md', readme)
+    shutil.copy(ROOT / 'docs' / 'performance.md', readme)
     original = readme.read_text()
     assert original.count(run_all.BEGIN) == 1 and original.count(run_all.END) == 1
     before = original[:original.index(run_all.BEGIN) + len(run_all.BEGIN)]
@@ -73,11 +73,10 @@ def test_readme_block_is_rewritten_in_place(tmp_path):
     assert readme.read_text() == before + '\nsecond\n' + after
 
 
-def test_the_repository_readme_has_one_block_in_the_performance_section():
-    text = (ROOT / 'README.md').read_text()
-    section = text[text.index('\n## Performance\n'):]
-    section = section[:section.index('\n## ', 1)]
-    assert section.count(run_all.BEGIN) == 1 and section.count(run_all.END) == 1
+def test_the_performance_page_has_one_block_and_the_readme_links_it():
+    text = (ROOT / 'docs' / 'performance.md').read_text()
+    assert text.count(run_all.BEGIN) == 1 and text.count(run_all.END) == 1
+    assert '(docs/performance.md)' in (ROOT / 'README.md').read_text()
 
 
 @pytest.mark.parametrize('text, message', [
@@ -144,13 +143,13 @@ def test_run_all_stops_before_writing_when_a_bench_writes_no_results(tmp_path, m
         raise RuntimeError(f'{script} wrote no results')
     monkeypatch.setattr(run_all, 'run_bench', failing)
     with pytest.raises(RuntimeError):
-        run_all.main(['--readme', str(readme)])
+        run_all.main(['--page', str(readme)])
     assert readme.read_text() == f'keep\n{run_all.BEGIN}\nold\n{run_all.END}\nkeep\n'
 
 
 def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys):
     readme = tmp_path / 'README.md'
-    shutil.copy(ROOT / 'README.md', readme)
+    shutil.copy(ROOT / 'docs' / 'performance.md', readme)
     original = readme.read_text()
     calls = []
 
@@ -161,18 +160,18 @@ def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys)
         return results.load(json_path)
     monkeypatch.setattr(run_all, 'run_bench', stand_in)
 
-    assert run_all.main(['--quick', '--readme', str(readme)]) == 1   # a target not met
+    assert run_all.main(['--quick', '--page', str(readme)]) == 1   # a target not met
     assert readme.read_text() == original                            # --quick: not written
     assert [c[0] for c in calls] == ['bench_core.py', 'bench_estimator.py',
                                      'bench_realtime.py']
     assert calls[0][1] == ['--quick'] and calls[2][1] == ['--duration', '5']
 
-    assert run_all.main(['--quick', '--write', '--readme', str(readme)]) == 1
+    assert run_all.main(['--quick', '--write', '--page', str(readme)]) == 1
     new = readme.read_text()
     out = capsys.readouterr().out
     block = new[new.index(run_all.BEGIN) + len(run_all.BEGIN):new.index(run_all.END)]
     assert block.strip() in out
-    assert '`.venv/bin/python bench/run_all.py --quick --write --readme' in block
+    assert '`.venv/bin/python bench/run_all.py --quick --write --page' in block
     assert 'rmw_test' in block and 'quick run' in block and '- run time: ' in block
     assert new[:new.index(run_all.BEGIN)] == original[:original.index(run_all.BEGIN)]
     assert new[new.index(run_all.END):] == original[original.index(run_all.END):]

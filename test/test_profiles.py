@@ -124,7 +124,7 @@ def test_sine_sweep_is_a_linear_chirp():
 
 
 def test_eq26_peak_angular_acceleration_is_2w_over_t():
-    # README and config/table1.yaml quote it (0.27 rad/s^2) against the default
+    # docs/usage.md and config/table1.yaml quote it (0.27 rad/s^2) against the default
     # max_angular_acceleration of the simulator (0.5 rad/s^2)
     t = np.linspace(0, 40, 400001)
     peak = np.max(np.abs(Eq26Profile().omega_dot(t)))

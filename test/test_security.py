@@ -1,4 +1,4 @@
-"""Security posture (README "Security posture"): SROS2 settings fail closed here.
+"""Security posture (docs/security.md): SROS2 settings fail closed here.
 
 The nodes take an SROS2 enclave like any rclpy node. With ``ROS_SECURITY_STRATEGY=Enforce``
 a node must not run unsecured: it refuses to start when its enclave is missing from the

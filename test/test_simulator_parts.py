@@ -67,7 +67,7 @@ def test_command_timeout_is_off_by_default_passed_to_the_engine_and_documented()
     assert engine.command_timeout == 0.5
     engine, _ = build_settings({**defaults(), 'command_timeout': 0.4, 'setpoint_delay': 0.2})
     assert engine.command_timeout == 0.4
-    readme = (ROOT / 'README.md').read_text()
+    readme = (ROOT / 'docs' / 'usage.md').read_text()
     assert '`command_timeout` (s; 0 = off' in readme
     assert 'at least 2 × `setpoint_delay`' in readme
 

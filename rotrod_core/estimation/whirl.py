@@ -76,7 +76,7 @@ _MAX_ITERATIONS = 30
 _START_ITERATIONS = 4       # for the first whirl alone: a start value, the other unmodelled
 _DRIFT_SIGNIFICANCE = 25.0  # (|c| / std c)^2 above which a drift term is kept
 _ZERO_PAD = 8               # periodogram length: this many times the number of blocks
-MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (1e4 took 1.2 GB)
+MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (docs/realtime.md)
 
 
 @dataclass(frozen=True)

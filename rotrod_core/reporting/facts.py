@@ -36,7 +36,7 @@ RUN_LENGTH = 40.0
 """Length of the paper's run, s."""
 
 RUN_STEP = 1e-3
-"""Step of the Eq. 26 run, s (accurate to ~1e-14 m, see README)."""
+"""Step of the Eq. 26 run, s (accurate to ~1e-14 m: docs/performance.md)."""
 
 FREQUENCY_SPEEDS = (0.0, 1.0, 2.0, 4.0, 6.0, 8.0, 10.0)
 """Constant angular velocities (rad/s) at which the frequencies are measured (Fig. 9)."""
