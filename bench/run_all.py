@@ -6,14 +6,15 @@
     .venv/bin/python bench/run_all.py --quick --write # ... and written anyway
     .venv/bin/python bench/run_all.py --no-write      # full run, docs/performance.md untouched
 
-Runs bench_core.py, bench_estimator.py and bench_realtime.py one after the other, each
-as its own process writing its rows as JSON (bench/results.py); their own tables go to
-stderr. The combined table, stamped with the date, the machine, the load average at
-start, the code measured and this command, goes to stdout and replaces what lies
-between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in docs/performance.md; nothing
-outside the markers is touched. A bench that fails, or a row with a missing value,
-stops the run before docs/performance.md is written. Exit status: 0 when every target is met,
-1 when some target is not (docs/performance.md is still written), 2 on an error.
+Runs bench_core.py, bench_estimator.py, bench_realtime.py and bench_fleet.py one after
+the other, each as its own process writing its rows as JSON (bench/results.py); their
+own tables go to stderr. The combined table, stamped with the date, the machine, the
+load average at start, the code measured and this command, goes to stdout and replaces
+what lies between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in
+docs/performance.md; nothing outside the markers is touched. A bench that fails, or a
+row with a missing value, stops the run before docs/performance.md is written. Exit
+status: 0 when every target is met, 1 when some target is not (docs/performance.md is
+still written), 2 on an error.
 """
 
 from __future__ import annotations
@@ -276,7 +277,10 @@ def main(argv: list | None = None) -> int:
     rows, notes, loads = [], [], []
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
-               ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600)]
+               ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600),
+               ('bench_fleet.py', ['--duration', f'{duration:g}',
+                                   *(['--rods', '3'] if args.quick else [])],
+                2 * duration + 600)]
     with tempfile.TemporaryDirectory(prefix='rotrod-bench-') as tmp:
         tmp = Path(tmp)
         for script, bench_args, timeout in benches:

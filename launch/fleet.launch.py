@@ -1,0 +1,44 @@
+"""A fleet of rods on a full ROS 2 install: ``ros2 launch rotrod fleet.launch.py rods:=10``.
+
+Starts ``rods`` simulators (default 10) in the namespaces rod0 .. rod{rods-1}, each with
+config/table1.yaml and config/fleet.yaml (real time, markers off), and with
+``profiles:=true`` a profile publisher per rod streaming Eq. 26 in a loop. The same
+fleet without ``launch``: ``python -m rotrod_ros.fleet --rods 10 [--profile]``.
+"""
+
+import os
+
+from ament_index_python.packages import get_package_share_directory
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+
+
+def rods(context):
+    """A simulator (and a profile publisher if asked) per rod namespace."""
+    share = get_package_share_directory('rotrod')
+    params = [os.path.join(share, 'config', name) for name in ('table1.yaml', 'fleet.yaml')]
+    count = int(LaunchConfiguration('rods').perform(context))
+    profiles = LaunchConfiguration('profiles').perform(context).lower() == 'true'
+    actions = []
+    for k in range(count):
+        ns = f'rod{k}'
+        actions.append(Node(package='rotrod', executable='simulator', namespace=ns,
+                            name='rotrod_simulator', output='screen',
+                            parameters=[*params, {'frame_prefix': f'{ns}/'}]))
+        if profiles:
+            actions.append(Node(package='rotrod', executable='profile_publisher',
+                                namespace=ns, name='rotrod_profile_publisher',
+                                parameters=params, output='screen'))
+    return actions
+
+
+def generate_launch_description():
+    """The fleet: launch arguments rods (10) and profiles (false)."""
+    return LaunchDescription([
+        DeclareLaunchArgument('rods', default_value='10', description='number of rods'),
+        DeclareLaunchArgument('profiles', default_value='false',
+                              description='a profile publisher per rod'),
+        OpaqueFunction(function=rods),
+    ])

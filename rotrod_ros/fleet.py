@@ -1,0 +1,129 @@
+"""A fleet of rods: N simulators in the namespaces rod0 .. rod{N-1}, from one command.
+
+    python -m rotrod_ros.fleet --rods 10 [--profile] [--duration S] [--params-file F]...
+
+Every simulator gets config/table1.yaml, config/fleet.yaml (real time, markers off),
+then the given files, and its namespace as its frames' prefix (``rod3/rotor``, ...);
+with ``--profile`` each rod also gets its own profile publisher streaming
+config/fleet.yaml's profile (Eq. 26, looped) on its ``cmd/omega``. The processes log to
+``<log-dir>/<namespace>_<node>.log``; the fleet runs until ``--duration`` has passed or
+Ctrl-C, then stops them all. A full ROS install does the same with ``ros2 launch rotrod
+fleet.launch.py rods:=10`` (launch/fleet.launch.py).
+
+DDS stays on this machine unless the caller set otherwise
+(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; a ROS_DOMAIN_ID is chosen if none is set).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+from .demo import DemoError, Processes, ros_environment
+from .install import executable, share_file
+
+PARAM_FILES = ('config/table1.yaml', 'config/fleet.yaml')
+"""Parameter files of every node of the fleet, in order (later ones override)."""
+MAX_RODS = 100
+
+
+def namespaces(rods: int) -> list[str]:
+    """The rods' namespaces: /rod0, /rod1, ..."""
+    if isinstance(rods, bool) or not isinstance(rods, int) or not 1 <= rods <= MAX_RODS:
+        raise ValueError(f'rods must be an integer 1..{MAX_RODS}, got {rods!r}')
+    return [f'/rod{k}' for k in range(rods)]
+
+
+def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict:
+    """The commands (``<ns>_<node>`` -> argv) that start the fleet."""
+    files = []
+    for f in (*(str(share_file(p)) for p in PARAM_FILES), *map(str, params_files)):
+        files += ['--params-file', f]
+    cmds = {}
+    for ns in namespaces(rods):
+        cmds[f'{ns[1:]}_simulator'] = [*executable('simulator'), '--ros-args',
+                                       '-r', f'__ns:={ns}', *files,
+                                       '-p', f'frame_prefix:={ns[1:]}/']
+        if profile:
+            cmds[f'{ns[1:]}_profile_publisher'] = [
+                *executable('profile_publisher'), '--ros-args', '-r', f'__ns:={ns}', *files]
+    return cmds
+
+
+def start(rods: int, log_dir: Path, *, profile: bool = False, params_files=(),
+          env: dict | None = None, ready_timeout: float = 60.0) -> Processes:
+    """Start the fleet and wait until every simulator is ready; return the processes."""
+    procs = Processes(Path(log_dir), ros_environment(os.environ if env is None else env))
+    cmds = fleet_commands(rods, profile=profile, params_files=params_files)
+    try:
+        for name, cmd in cmds.items():
+            if name.endswith('_simulator'):
+                procs.start(name, cmd)
+        for name in cmds:
+            if name.endswith('_simulator'):
+                procs.wait_for_log(name, 'ready', ready_timeout)
+        for name, cmd in cmds.items():
+            if not name.endswith('_simulator'):
+                procs.start(name, cmd)
+    except BaseException:
+        procs.stop_all()
+        raise
+    return procs
+
+
+def main(argv: list | None = None) -> int:
+    """``python -m rotrod_ros.fleet``: run a fleet until the duration or Ctrl-C."""
+    parser = argparse.ArgumentParser(prog='python -m rotrod_ros.fleet',
+                                     description=__doc__.split('\n')[0])
+    parser.add_argument('--rods', type=int, default=10, help='number of rods (default 10)')
+    parser.add_argument('--profile', action='store_true',
+                        help="a profile publisher per rod (config/fleet.yaml's profile)")
+    parser.add_argument('--duration', type=float, default=None,
+                        help='wall seconds to run (default: until Ctrl-C)')
+    parser.add_argument('--params-file', action='append', default=[], type=Path,
+                        help='another parameter file for every node (repeatable)')
+    parser.add_argument('--log-dir', type=Path, default=Path('out/fleet'),
+                        help='where the nodes log (default out/fleet)')
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        namespaces(args.rods)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.duration is not None and not args.duration > 0:
+        parser.error(f'--duration must be > 0, got {args.duration!r}')
+    for f in args.params_file:
+        if not f.is_file():
+            parser.error(f'--params-file {f}: no such file')
+    stop = []
+    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
+    try:
+        procs = start(args.rods, args.log_dir, profile=args.profile,
+                      params_files=args.params_file)
+    except (DemoError, FileNotFoundError) as exc:
+        print(f'fleet: {exc}', file=sys.stderr)
+        return 1
+    print(f'fleet: {args.rods} rods running in /rod0 .. /rod{args.rods - 1} '
+          f'(ROS_DOMAIN_ID={procs.env["ROS_DOMAIN_ID"]}); logs in {args.log_dir}',
+          flush=True)
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        while not stop and (deadline is None or time.monotonic() < deadline):
+            dead = [n for n, (p, _) in procs.procs.items() if p.poll() is not None]
+            if dead:
+                print(f'fleet: {", ".join(dead)} exited:\n{procs.log(dead[0])}',
+                      file=sys.stderr)
+                return 1
+            time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        procs.stop_all()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
