@@ -57,7 +57,7 @@ def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict
 def start(rods: int, log_dir: Path, *, profile: bool = False, params_files=(),
           env: dict | None = None, ready_timeout: float = 60.0) -> Processes:
     """Start the fleet and wait until every simulator is ready; return the processes."""
-    procs = Processes(Path(log_dir), ros_environment(os.environ if env is None else env))
+    procs = Processes(Path(log_dir), ros_environment(dict(os.environ) if env is None else env))
     cmds = fleet_commands(rods, profile=profile, params_files=params_files)
     try:
         for name, cmd in cmds.items():

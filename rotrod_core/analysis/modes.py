@@ -137,12 +137,12 @@ def modal_analysis(params: RodParams, omega: float) -> ModalAnalysis:
     modes.sort(key=lambda m: m.frequency)
     # Coincident pairs (e.g. an isotropic rod at rest): the eigenspace holds both
     # circular whirls and the solver's basis is arbitrary, so name one of each.
-    for a, b in zip(range(len(modes)), range(1, len(modes))):
-        ma, mb = modes[a], modes[b]
+    for i, j in zip(range(len(modes)), range(1, len(modes))):
+        ma, mb = modes[i], modes[j]
         close = abs(ma.eigenvalue - mb.eigenvalue) <= 1e-9 * abs(ma.eigenvalue)
         if ma.whirl != 'none' and close:
-            modes[a] = dataclasses.replace(ma, whirl='forward')
-            modes[b] = dataclasses.replace(mb, whirl='backward')
+            modes[i] = dataclasses.replace(ma, whirl='forward')
+            modes[j] = dataclasses.replace(mb, whirl='backward')
     return ModalAnalysis(omega=w, modes=tuple(modes))
 
 

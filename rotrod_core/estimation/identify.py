@@ -407,6 +407,8 @@ def _chain(S: np.ndarray, n: int | None = None, work: _Workspace | None = None) 
         n = S.shape[0]
         work = _Workspace()
         work.steps(n)[:n] = S
+    elif n is None:
+        raise ValueError('_chain: n (the number of steps) is needed with work')
     S, B, nb = work.S, work.block, work.blocks
     P = S.reshape(nb, B, d, d)
     cum = work.cum
@@ -517,17 +519,19 @@ def _moved(point: _Point, step: np.ndarray, k_nl: int) -> _Point:
                                residual=residual, rss=float(residual @ residual))
 
 
-def _refine(problem: _Problem, a: float, g: float, max_iterations=_MAX_ITERATIONS,
-            point: _Point | None = None, lazy: bool = False):
+def _refine(problem: _Problem, a: float, g: float, max_iterations: int = _MAX_ITERATIONS,
+            start: _Point | None = None,
+            lazy: bool = False) -> tuple[_Point | None, int, bool]:
     """Levenberg-Marquardt over the nonlinear parameters from (a, g).
 
     Returns (point, iterations, converged); point None when the start overflows. With
     ``lazy``, a first step within half a standard deviation is taken as the linearized
     last step (the warm start of a sliding window, whose optimum moves little).
     """
-    point = point or problem.evaluate(a, g)
-    if point is None:
+    first_point = start or problem.evaluate(a, g)
+    if first_point is None:
         return None, 0, False
+    point: _Point = first_point
     lam = 1e-3
     k_nl = len(problem.nonlinear)
     for iteration in range(1, max_iterations + 1):
@@ -567,7 +571,7 @@ def _refine(problem: _Problem, a: float, g: float, max_iterations=_MAX_ITERATION
                 accepted = True
                 break
             lam *= 10
-        if not accepted:
+        if not accepted or trial is None:
             return point, iteration, True     # no decrease possible: at the minimum
         small = np.all(np.abs(step[:k_nl]) <= np.maximum(
             1e-4 * std_nl, 1e-13 * np.abs([point.a, point.g][:k_nl]) + 1e-300))
@@ -627,7 +631,7 @@ def _modulating_start(rec: _Record):
     w_dd = np.concatenate(weights[0::2])
     w_p = np.concatenate(weights[1::2])
     a = 0.0
-    est = None
+    est = np.zeros(3)
     for _ in range(3):
         wt = 1.0 / np.sqrt(w_dd**2 + (a * w_p) ** 2)
         A = _stack(R * wt[:, None])
@@ -848,8 +852,8 @@ def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX
     problem = _Problem(rec, zeta=zeta, r0=r0, work=work)
     point, iterations, converged = None, 0, False
     if warm is not None:
-        point, iterations, converged = _refine(problem, *warm, max_iterations=max_iterations,
-                                               lazy=True)
+        point, iterations, converged = _refine(problem, warm[0], warm[1],
+                                               max_iterations=max_iterations, lazy=True)
     if point is None or not converged:
         start = _modulating_start(rec)
         if start is not None:
@@ -857,7 +861,7 @@ def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX
         if point is None or not converged:
             grid = _grid_start(problem, rec)
             if grid is not None:
-                point, iterations, converged = _refine(problem, grid.a, grid.g, point=grid)
+                point, iterations, converged = _refine(problem, grid.a, grid.g, start=grid)
     if point is None:
         raise NotIdentifiable('the output-error fit failed: the model overflows from every '
                               'start (no stable rod fits this record)')
@@ -997,8 +1001,8 @@ class RigIdentifier:
         self._begin = self._end = 0
         self._first = math.nan
         self._last_update = -math.inf
-        self._with_rate = None
-        self._warm = None
+        self._with_rate: bool | None = None
+        self._warm: tuple[float, float] | None = None
         self.estimate: RigEstimate | None = None
         self.reason = 'window not filled'
         self.error: NotIdentifiable | None = None

@@ -620,7 +620,7 @@ def _fitted_estimate(data, cfg, window, poles, common):
     # together a modulation of one whirl, e.g. a chirp, and misplace it): none of these
     # may cost the whirls' frequencies precision.
     degree = _drift_degree(fit)
-    largest = {}
+    largest: dict[str, tuple[float, int]] = {}
     for i, (name, whirl, kind, _, _) in enumerate(whirls):
         if kind != 'noise' and whirl.amplitude > largest.get(name, (-1.0, 0))[0]:
             largest[name] = (whirl.amplitude, i)
@@ -629,7 +629,7 @@ def _fitted_estimate(data, cfg, window, poles, common):
         fit = _fit(data, fit.s[keep], degree, window)
         dropped = [rec for rec in whirls if rec[0] not in largest]
         whirls = _whirls(fit, data, cfg, window) + dropped
-    chosen = {}
+    chosen: dict[str, tuple] = {}
     for name, whirl, kind, problem, pole in whirls:   # per sign: accepted, else largest
         rank = (kind == '', whirl.amplitude)
         if name not in chosen or rank > chosen[name][0]:
@@ -808,7 +808,7 @@ class WhirlEstimator:
         self._begin = self._end = 0
         self._first = math.nan
         self._last_update = -math.inf
-        self._poles = []
+        self._poles: list[complex] = []
         self.estimate = WhirlEstimate(reason='window not filled')
 
     @property

@@ -41,7 +41,7 @@ def _tan_over_x_coefficients(count: int) -> list:
     """
     t = [Fraction(1)]
     for n in range(1, count):
-        t.append(sum(t[i] * t[n - 1 - i] for i in range(n)) / (2 * n + 1))
+        t.append(sum((t[i] * t[n - 1 - i] for i in range(n)), Fraction(0)) / (2 * n + 1))
     return t
 
 
@@ -150,7 +150,7 @@ def _ritz_matrices(n: int):
     return (tip, *mats)
 
 
-_RITZ = {}
+_RITZ: dict[int, tuple] = {}
 
 
 def ritz_bending_frequencies(flexural_rigidity, length, tip_mass, line_density, tip_load,

@@ -40,7 +40,8 @@ CAMPBELL_OMEGAS = np.linspace(0.0, 30.0, 601)
 ROTATING_DAMPING = 0.02
 """Damping ratio of the damped Campbell cases."""
 
-RECTANGULAR = {'section': 'rectangular', 'section_width': 0.004, 'section_thickness': 0.003}
+RECTANGULAR: dict = {'section': 'rectangular', 'section_width': 0.004,
+                     'section_thickness': 0.003}
 """A 4 mm (radial) x 3 mm (tangential) rectangular rod, otherwise Table 1."""
 
 CAMPBELL_CASES = {

@@ -256,7 +256,7 @@ def critical_map_plot(cmap, label: str, reference_limit: float, path) -> Path:
     titles = dict(START_LABELS, **{label: f'{label} shape (numerical, dt = '
                                           f'{cmap.numerical_step:g} s)'})
     fig = Figure(figsize=MAP_SIZE, dpi=DPI, layout='constrained')
-    top, bottom = fig.subfigures(2, 1)
+    top, bottom = fig.subfigures(2, 1)  # type: ignore[misc]  # an array of two
     maps = top.subplots(1, 4)
     levels = np.linspace(0.0, w0, 25)
     cs = None

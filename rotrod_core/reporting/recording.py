@@ -101,7 +101,7 @@ class RecordingWriter:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
-        sinks = [rr.FileSink(str(self.path))]
+        sinks: list = [rr.FileSink(str(self.path))]
         self.serve_uri = None
         if serve_port is not None:
             server = rr.GrpcServerSink(bind_ip='127.0.0.1', port=int(serve_port))
@@ -140,7 +140,8 @@ class RecordingWriter:
 
     def _trim(self) -> None:
         """Drop what is older than ``pretrigger`` before the latest stamp (armed)."""
-        oldest = self.last_time - self.pretrigger if self.last_time is not None else 0.0
+        last, keep = self.last_time, self.pretrigger or 0.0
+        oldest = last - keep if last is not None else 0.0
         for rows in self._buffers.values():
             rows[:] = [r for r in rows if r[0] >= oldest]
 

@@ -150,7 +150,7 @@ def paper_report(*, facts, stages, frequencies, critical, limit, figures, record
     ``real_rig``: (the two :class:`~rotrod_core.reporting.rig_comparison.RigSummary`, the Campbell
     figure's file name, the Eq. 26 hold speed in rad/s), or None.
     """
-    verdicts = {}
+    verdicts: dict[str, int] = {}
     for f in facts:
         verdicts[f.verdict] = verdicts.get(f.verdict, 0) + 1
     summary = ', '.join(f'{n} {v}' for v, n in sorted(verdicts.items()))
