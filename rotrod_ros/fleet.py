@@ -38,7 +38,7 @@ def namespaces(rods: int) -> list[str]:
     return [f'/rod{k}' for k in range(rods)]
 
 
-def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict:
+def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict[str, list[str]]:
     """The commands (``<ns>_<node>`` -> argv) that start the fleet."""
     files = []
     for f in (*(str(share_file(p)) for p in PARAM_FILES), *map(str, params_files)):

@@ -26,7 +26,7 @@ def _ament_prefix() -> Path | None:
     return None
 
 
-def executable(name: str) -> list:
+def executable(name: str) -> list[str]:
     """The command (argv list) for one of the package's executables, e.g. ``simulator``.
 
     Looked up beside ``sys.executable`` (venv or pip install), then in

@@ -78,7 +78,7 @@ class ModalAnalysis:
     modes: tuple
 
     @property
-    def frequencies(self) -> tuple:
+    def frequencies(self) -> tuple[float, ...]:
         """Damped frequencies of the modes, Hz, ascending."""
         return tuple(m.frequency for m in self.modes)
 

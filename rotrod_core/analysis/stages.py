@@ -22,7 +22,7 @@ class StageExtremes:
     v_max: float
 
 
-def eq26_stages(period: float, t_end: float) -> list:
+def eq26_stages(period: float, t_end: float) -> list[tuple[str, float, float]]:
     """(name, start, stop) of spin-up, hold, spin-down and rest for Eq. 26 with period T."""
     T = period
     stages = [('spin-up', 0.0, T), ('hold', T, 4 * T / 3), ('spin-down', 4 * T / 3, 7 * T / 3),
@@ -30,12 +30,13 @@ def eq26_stages(period: float, t_end: float) -> list:
     return [(n, a, min(b, t_end)) for n, a, b in stages if a < t_end]
 
 
-def stage_extremes(result: SimulationResult, period: float) -> list:
+def stage_extremes(result: SimulationResult, period: float) -> list[StageExtremes]:
     """Extreme u and v in each Eq. 26 stage of ``result`` (a list of StageExtremes)."""
     return series_stage_extremes(result.t, result.u, result.v, period)
 
 
-def series_stage_extremes(t, u, v, period: float, t_end: float | None = None) -> list:
+def series_stage_extremes(t, u, v, period: float,
+                          t_end: float | None = None) -> list[StageExtremes]:
     """Extreme u and v (m) in each Eq. 26 stage of sampled series (t in s from the start).
 
     Stages end at ``t_end`` (default: the last sample); a stage with no sample is left out.

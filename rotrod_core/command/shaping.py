@@ -178,7 +178,7 @@ class LowerEnvelope:
             self._hull = [i - h for i in self._hull]
             self._head = 0
 
-    def vertices(self) -> list:
+    def vertices(self) -> list[int]:
         """Positions in the window (0 = oldest) of the hull's vertices."""
         return [i - self._head for i in self._hull]
 
@@ -190,7 +190,7 @@ class LowerEnvelope:
         """
         return (self._t[-1] - self._t[self._head]) / (self.count - 1)
 
-    def line(self) -> tuple:
+    def line(self) -> tuple[float, float]:
         """The grid: (slope, value at the newest point) of a supporting line.
 
         The hull's supporting line at the window's middle: of the lines below every
@@ -374,7 +374,7 @@ class OmegaSetpointShaper:
         self.setpoint = w_set
         return ramp
 
-    def _extrapolation(self) -> tuple:
+    def _extrapolation(self) -> tuple[np.ndarray, np.ndarray]:
         """The stream extrapolated from its latest setpoint for ``max_stall``.
 
         Knot times (s) and angular velocities (rad/s): w' goes on linearly (slope and

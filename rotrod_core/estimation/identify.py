@@ -903,7 +903,8 @@ def identify_rig(t, u, v, omega, *, omega_dot=None, damping_ratio=None, eccentri
 
 
 def rig_cramer_rao(t, omega, natural_frequency, eccentricity, damping_ratio, noise_std, *,
-                   omega_dot=None, initial_deflection=0j, initial_rate=0j) -> dict:
+                   omega_dot=None, initial_deflection=0j,
+                   initial_rate=0j) -> dict[str, float]:
     """Cramer-Rao standard deviations of (w0, r0, zeta) for a record of this drive.
 
     White Gaussian noise of ``noise_std`` (m) on u and on v, the initial state unknown

@@ -235,7 +235,8 @@ def estimate_whirl(t, u, v, settings: WhirlSettings | None = None) -> WhirlEstim
     return _estimate(t, z, settings or WhirlSettings())[0]
 
 
-def estimate_whirl_frequencies(t, u, v, settings: WhirlSettings | None = None) -> tuple:
+def estimate_whirl_frequencies(t, u, v, settings: WhirlSettings | None = None
+                               ) -> tuple[float, float]:
     """(f1, f2) in Hz, forward and backward whirl of a window; NaN where no estimate.
 
     See :func:`estimate_whirl` for the arguments and :class:`WhirlEstimate` for more.

@@ -128,7 +128,7 @@ class RealTimeStepper:
             raise NonFiniteStateError(f'the {what} of the state {tuple(self._state)} '
                                       f'overflows: {values}')
 
-    def inertial_position(self) -> tuple:
+    def inertial_position(self) -> tuple[float, float]:
         """Position (x, y) of the mass in the inertial frame, m.
 
         The state is always finite; a quantity derived from it that overflows (an

@@ -33,7 +33,7 @@ SERIES_LIMIT = 0.25
 """|y| below which the power series is used instead of the closed form (y = P l^2 / EI)."""
 
 
-def _tan_over_x_coefficients(count: int) -> list:
+def _tan_over_x_coefficients(count: int) -> list[Fraction]:
     """Exact coefficients t_n of tan(x) / x = sum t_n x^(2n), n = 0 .. count - 1.
 
     From tan' = 1 + tan^2: (2n + 1) t_n = sum_{i + j = n - 1} t_i t_j, t_0 = 1.

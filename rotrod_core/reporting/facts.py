@@ -143,7 +143,8 @@ def eq26_run(params: RodParams = TABLE1) -> SimulationResult:
     return simulate(params, EQ26, RUN_LENGTH, dt=RUN_STEP)
 
 
-def measure_frequencies(params: RodParams = TABLE1, speeds=FREQUENCY_SPEEDS) -> list:
+def measure_frequencies(params: RodParams = TABLE1,
+                        speeds=FREQUENCY_SPEEDS) -> list[FrequencyRow]:
     """Eq. 28 beside the whirl frequencies fitted to a simulated constant-speed run."""
     rows = []
     for w in speeds:
@@ -159,7 +160,7 @@ def measure_frequencies(params: RodParams = TABLE1, speeds=FREQUENCY_SPEEDS) -> 
 
 
 def critical_speeds(params: RodParams = TABLE1, eccentricities=CRITICAL_ECCENTRICITIES,
-                    limit: float = DEFLECTION_LIMIT, progress=None) -> list:
+                    limit: float = DEFLECTION_LIMIT, progress=None) -> list[CriticalRow]:
     """Critical speeds vs eccentricity for one deflection limit (m): closed and numerical.
 
     ``progress``, if given, is called with a short text after each numerical run.
@@ -227,7 +228,7 @@ def _profile_fact(profile: Eq26Profile) -> Fact:
         values={'peak_omega_dot': float(wd[k]), 'omega_dot_step': float(wd_step)})
 
 
-def stage_facts(run: SimulationResult, params: RodParams = TABLE1) -> list:
+def stage_facts(run: SimulationResult, params: RodParams = TABLE1) -> list[Fact]:
     """The paper's statements about the four stages of the Eq. 26 run (Figs. 4-8)."""
     period = EQ26.period
     st = {s.name: s for s in stage_extremes(run, period)}
@@ -358,7 +359,7 @@ def stage_facts(run: SimulationResult, params: RodParams = TABLE1) -> list:
     return facts
 
 
-def frequency_facts(rows: list, params: RodParams = TABLE1) -> list:
+def frequency_facts(rows: list, params: RodParams = TABLE1) -> list[Fact]:
     """Eq. 28 / Fig. 9 statements against the fitted frequencies."""
     worst = max(max(abs(r.f1_measured - r.f1) / r.f1, abs(r.f2_measured - r.f2) / r.f2)
                 for r in rows)
@@ -481,7 +482,7 @@ def coupling_fact(drift: dict) -> Fact:
 
 
 def paper_facts(run: SimulationResult, frequencies: list, critical: list, drift: dict,
-                params: RodParams = TABLE1) -> list:
+                params: RodParams = TABLE1) -> list[Fact]:
     """Every fact, in the paper's order."""
     return ([_profile_fact(EQ26)] + stage_facts(run, params)
             + frequency_facts(frequencies, params) + [step_response_fact(params),

@@ -237,13 +237,13 @@ def write_run(path: str | Path, run, *, sample_interval: float = 0.01,
     return len(keep)
 
 
-def entity_paths(path: str | Path) -> list:
+def entity_paths(path: str | Path) -> list[str]:
     """Entity paths in a recording (needs a complete file, with its footer)."""
     from rerun.chunk import RrdReader
     return list(RrdReader(str(path)).store().schema().entity_paths())
 
 
-def read_series(path: str | Path, entity: str) -> tuple:
+def read_series(path: str | Path, entity: str) -> tuple[np.ndarray, np.ndarray]:
     """(t, values) of an entity, sorted by time: t in s, values (N,) or (N, k) floats.
 
     Reads the chunks directly (works also without a footer, e.g. after a kill).

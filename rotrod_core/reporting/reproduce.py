@@ -71,7 +71,7 @@ def _require(recording: bool) -> None:
                               '(or use --no-recording)') from None
 
 
-def _draw(run, frequencies, critical, params, out: Path) -> tuple:
+def _draw(run, frequencies, critical, params, out: Path) -> tuple[Path, ...]:
     profile = paper.EQ26
     u_s = static_deflection(params, profile.omega_target)[0]     # the hold's plot centre
     names = [name for name, _ in FIGURES]
