@@ -4,7 +4,9 @@ rotrod simulate --profile eq26 -o run.csv
 rotrod simulate --drive torque --torque 0.01 --t-end 10 -o spin.npz
 rotrod frequencies --omega 0 1 2
 rotrod critical-speed --limit 0.003 --eccentricity 0.05 0.1 0.2
+rotrod simulate --profile eq26 -o run.csv --bag run_bag
 rotrod plan --omega 2 --robust 0.1 --residual 1e-6 -o plan.csv
+rotrod urdf --params-file config/table1.yaml -o rotrod.urdf
 rotrod demo
 rotrod reproduce --out out/reproduce
 rotrod analyze --out out/analyze --only campbell coupling
@@ -31,7 +33,7 @@ from rotrod_core.command.profiles import (
     profile_from_options,
 )
 from rotrod_core.model.equations import COUPLINGS
-from rotrod_core.model.params import RodParams
+from rotrod_core.model.params import DEFAULT_HUB_RADIUS, RodParams
 from rotrod_core.offline.simulate import simulate
 
 PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
@@ -196,6 +198,24 @@ def cmd_plan(args) -> int:
     return 0
 
 
+def cmd_urdf(args) -> int:
+    """Write the URDF for the parameter files and options (stdout without -o)."""
+    from rotrod_core.model.urdf import rod_params_from_files, urdf_text
+    params = rod_params_from_files(args.params_file or [], namespace=args.namespace)
+    given = {k: getattr(args, k) for k in PARAM_FIELDS if getattr(args, k) is not None}
+    if args.section:
+        given['section'] = args.section
+    text = urdf_text(params.replace(**given), disk_radius=args.disk_radius)
+    if args.output is None:
+        sys.stdout.write(text)
+        return 0
+    if not args.output.parent.exists():
+        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    args.output.write_text(text)
+    print(f'wrote {args.output}')
+    return 0
+
+
 def cmd_demo(args) -> int:
     """The paper's Eq. 26 scenario through the ROS nodes (or offline), per-stage summary."""
     if not args.offline:
@@ -310,6 +330,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('-o', '--output', type=Path, required=True,
                    help='FILE.csv (the figure goes beside it as FILE.png)')
     p.set_defaults(func=cmd_plan)
+
+    p = sub.add_parser('urdf', help='the URDF of the rod on its disk for the given '
+                                    "parameters (robot_state_publisher's robot_description)")
+    p.add_argument('--params-file', type=Path, action='append', metavar='FILE',
+                   help="the simulator's ROS 2 parameter file(s), applied in order; the "
+                        'options below override them')
+    p.add_argument('--namespace', default='/',
+                   help='namespace of the simulator node whose parameters apply (default /)')
+    _add_params(p)
+    p.add_argument('--disk-radius', type=_finite, default=DEFAULT_HUB_RADIUS,
+                   help=f'radius of the drawn disk [m] (default {DEFAULT_HUB_RADIUS:g})')
+    p.add_argument('-o', '--output', type=Path, help='FILE.urdf (default: stdout)')
+    p.set_defaults(func=cmd_urdf)
 
     p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
                                     'to a Rerun recording, with a stage summary')
