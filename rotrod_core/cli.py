@@ -105,10 +105,20 @@ def _initial(args) -> dict:
 def cmd_simulate(args) -> int:
     """Run one offline simulation and write CSV or NPZ."""
     params = _params(args)
-    if args.output.suffix.lower() not in ('.csv', '.npz'):
-        raise ValueError(f'-o must end in .csv or .npz, got {str(args.output)!r}')
-    if not args.output.parent.exists():
-        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    if args.output is None and args.bag is None:
+        raise ValueError('nothing to write: give -o FILE.csv|.npz and/or --bag DIR')
+    if args.output is not None:
+        if args.output.suffix.lower() not in ('.csv', '.npz'):
+            raise ValueError(f'-o must end in .csv or .npz, got {str(args.output)!r}')
+        if not args.output.parent.exists():
+            raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    bag_settings = None
+    if args.bag is not None:
+        from rotrod_core.reporting.bag import BagSettings
+        bag_settings = BagSettings(publish_rate=args.bag_rate, namespace=args.bag_namespace,
+                                   frame_prefix=args.bag_frame_prefix)
+        if args.bag.exists():
+            raise ValueError(f'{args.bag} exists: a bag is written into a new directory')
     initial = _initial(args)
     if args.drive == 'velocity':
         if args.torque is not None:
@@ -120,11 +130,23 @@ def cmd_simulate(args) -> int:
             raise ValueError('--drive torque needs --torque Q [N m]')
         run = simulate(params, torque=args.torque, t_end=args.t_end, dt=args.dt,
                        coupling=args.coupling, initial=initial)
-    run.save(args.output)
-    print(f'wrote {args.output} ({len(run.t)} samples, {args.drive} drive, '
-          f'{args.coupling} coupling): max u {1e3 * run.u.max():.6f} mm, '
-          f'v in [{1e3 * run.v.min():.6f}, {1e3 * run.v.max():.6f}] mm, '
-          f'final omega {run.omega[-1]:.6f} rad/s')
+    summary = (f'({len(run.t)} samples, {args.drive} drive, '
+               f'{args.coupling} coupling): max u {1e3 * run.u.max():.6f} mm, '
+               f'v in [{1e3 * run.v.min():.6f}, {1e3 * run.v.max():.6f}] mm, '
+               f'final omega {run.omega[-1]:.6f} rad/s')
+    if args.output is not None:
+        run.save(args.output)
+        print(f'wrote {args.output} {summary}')
+    if bag_settings is not None:
+        from rotrod_core.reporting.bag import write_bag
+        try:
+            counts = write_bag(args.bag, run, bag_settings)
+        except ImportError as exc:
+            print(f'rotrod simulate: no bag: {exc} (pip install rosbags)', file=sys.stderr)
+            return 2
+        print(f'wrote rosbag2 (mcap) {args.bag}: '
+              + ', '.join(f'{topic} {n}' for topic, n in counts.items())
+              + f'; play it with: ros2 bag play {args.bag}')
     return 0
 
 
@@ -291,7 +313,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help='initial state: u, v [m], du, dv [m/s], theta [rad], omega [rad/s]')
     p.add_argument('--t-end', type=_finite, default=40.0, help='duration [s] (default 40)')
     p.add_argument('--dt', type=_finite, default=1e-3, help='step [s] (default 0.001)')
-    p.add_argument('-o', '--output', type=Path, required=True, help='FILE.csv or FILE.npz')
+    p.add_argument('-o', '--output', type=Path, help='FILE.csv or FILE.npz')
+    g = p.add_argument_group('rosbag2 (MCAP) of the run, as the simulator node publishes it '
+                             '(docs/ros_integration.md)')
+    g.add_argument('--bag', type=Path, metavar='DIR', help='bag directory to create')
+    g.add_argument('--bag-rate', type=_finite, default=100.0, metavar='HZ',
+                   help="the node's publish_rate [Hz of simulated time] (default 100)")
+    g.add_argument('--bag-namespace', default='/', metavar='NS',
+                   help='namespace of the topics, e.g. /offline (default /)')
+    g.add_argument('--bag-frame-prefix', default='', metavar='PREFIX',
+                   help="prefix of the frame ids world and rotor, as the node's frame_prefix")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser('frequencies', help='dynamic frequencies at constant speeds (Eq. 28)')
