@@ -144,7 +144,8 @@ def cmd_simulate(args) -> int:
         except ImportError as exc:
             print(f'rotrod simulate: no bag: {exc} (pip install rosbags)', file=sys.stderr)
             return 2
-        print(f'wrote rosbag2 (mcap) {args.bag}: '
+        size = sum(f.stat().st_size for f in args.bag.iterdir())
+        print(f'wrote rosbag2 (mcap) {args.bag}, {size / 1e6:.1f} MB: '
               + ', '.join(f'{topic} {n}' for topic, n in counts.items())
               + f'; play it with: ros2 bag play {args.bag}')
     return 0

@@ -260,6 +260,23 @@ def test_metadata_yaml_is_what_jazzys_rosbag2_reads(bag):
     assert topics == TYPES
 
 
+def test_rerun_converts_the_bag(bag, tmp_path):
+    """A third reader: the Rerun viewer's MCAP loader (rerun-sdk's CLI), ROS 2 decoders."""
+    rerun = Path(sys.executable).parent / 'rerun'
+    if not rerun.exists():
+        pytest.skip('no rerun CLI beside this interpreter (pip install rerun-sdk)')
+    from rerun.chunk import RrdReader
+    (mcap_file,) = bag[0].glob('*.mcap')
+    out = tmp_path / 'bag.rrd'
+    done = subprocess.run([str(rerun), 'mcap', 'convert', str(mcap_file), '-o', str(out),
+                           '--timeline-type', 'duration'], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    paths = {str(p) for p in RrdReader(str(out)).store().schema().entity_paths()}
+    assert set(TYPES) <= paths
+    assert {'/joint_states/position', '/joint_states/velocity'} <= paths
+
+
 def test_rotrod_simulate_writes_a_namespaced_bag_and_refuses_bad_requests(tmp_path):
     cmd = [sys.executable, '-m', 'rotrod_core.cli', 'simulate', '--profile', 'eq26',
            '--t-end', '2']
