@@ -20,14 +20,14 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-from rotrod_core.model.urdf import rod_params_from_files, urdf_text
+from rotrod_core.model.urdf import urdf_for_parameter_files
 
 
 def generate_launch_description():
     """Simulator, Rerun logger, profile publisher and robot_state_publisher."""
     share = get_package_share_directory('rotrod')
     params = [os.path.join(share, 'config', name) for name in ('table1.yaml', 'demo.yaml')]
-    robot_description = urdf_text(rod_params_from_files(params))
+    robot_description = urdf_for_parameter_files(params)
     return LaunchDescription([
         DeclareLaunchArgument('use_sim_time', default_value='true',
                               description='robot_state_publisher follows /clock (the '

@@ -223,12 +223,17 @@ def cmd_plan(args) -> int:
 
 def cmd_urdf(args) -> int:
     """Write the URDF for the parameter files and options (stdout without -o)."""
-    from rotrod_core.model.urdf import rod_params_from_files, urdf_text
-    params = rod_params_from_files(args.params_file or [], namespace=args.namespace)
+    from rotrod_core.model.urdf import rod_params_from_files, simulator_parameters, urdf_text
+    files = args.params_file or []
+    params = rod_params_from_files(files, namespace=args.namespace)
     given = {k: getattr(args, k) for k in PARAM_FIELDS if getattr(args, k) is not None}
     if args.section:
         given['section'] = args.section
-    text = urdf_text(params.replace(**given), disk_radius=args.disk_radius)
+    disk_radius = args.disk_radius
+    if disk_radius is None:
+        disk_radius = float(simulator_parameters(files, namespace=args.namespace).get(
+            'disk_radius', DEFAULT_HUB_RADIUS))
+    text = urdf_text(params.replace(**given), disk_radius=disk_radius)
     if args.output is None:
         sys.stdout.write(text)
         return 0
@@ -371,8 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--namespace', default='/',
                    help='namespace of the simulator node whose parameters apply (default /)')
     _add_params(p)
-    p.add_argument('--disk-radius', type=_finite, default=DEFAULT_HUB_RADIUS,
-                   help=f'radius of the drawn disk [m] (default {DEFAULT_HUB_RADIUS:g})')
+    p.add_argument('--disk-radius', type=_finite, default=None,
+                   help="radius of the drawn disk [m] (default: the files' disk_radius, "
+                        f'else {DEFAULT_HUB_RADIUS:g})')
     p.add_argument('-o', '--output', type=Path, help='FILE.urdf (default: stdout)')
     p.set_defaults(func=cmd_urdf)
 

@@ -52,16 +52,14 @@ def test_launch_file_starts_robot_state_publisher_with_the_urdf_of_the_parameter
     (mapping,) = rsp['parameters'].elts
     entries = {ast.literal_eval(k): v for k, v in zip(mapping.keys, mapping.values)}
     assert set(entries) == {'robot_description', 'use_sim_time'}
-    # robot_description is urdf_text(rod_params_from_files(params)): the simulator's files
+    # robot_description is urdf_for_parameter_files(params): the simulator's files
     (assign,) = [a for a in ast.walk(tree) if isinstance(a, ast.Assign)
                  and a.targets[0].id == entries['robot_description'].id]
     call = assign.value
-    assert call.func.id == 'urdf_text'
-    (inner,) = call.args
-    assert inner.func.id == 'rod_params_from_files' and inner.args[0].id == 'params'
+    assert call.func.id == 'urdf_for_parameter_files' and call.args[0].id == 'params'
     imports = {alias.name: node.module for node in ast.walk(tree)
                if isinstance(node, ast.ImportFrom) for alias in node.names}
-    assert imports['urdf_text'] == imports['rod_params_from_files'] == 'rotrod_core.model.urdf'
+    assert imports['urdf_for_parameter_files'] == 'rotrod_core.model.urdf'
     # the launch argument it follows, declared with the demo's default (it runs on /clock)
     (declare,) = [c for c in ast.walk(tree) if isinstance(c, ast.Call)
                   and getattr(c.func, 'id', None) == 'DeclareLaunchArgument']

@@ -19,7 +19,12 @@ from reference import R0, L
 
 from rotrod_core.model import interface
 from rotrod_core.model.params import RodParams
-from rotrod_core.model.urdf import SHIPPED_FILE, rod_params_from_files, urdf_text
+from rotrod_core.model.urdf import (
+    SHIPPED_FILE,
+    rod_params_from_files,
+    urdf_for_parameter_files,
+    urdf_text,
+)
 from rotrod_ros.demo import PARAM_FILES
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -50,8 +55,7 @@ def tip_closed_form(r0, length, theta, u, v):
 def test_the_shipped_urdf_is_the_generators_for_table1_and_the_demos_parameter_files():
     assert SHIPPED.read_text() == urdf_text(RodParams())
     # what launch/demo.launch.py gives robot_state_publisher
-    assert urdf_text(rod_params_from_files([ROOT / f for f in PARAM_FILES])) == \
-        SHIPPED.read_text()
+    assert urdf_for_parameter_files([ROOT / f for f in PARAM_FILES]) == SHIPPED.read_text()
 
 
 def test_rotrod_urdf_writes_the_shipped_file_and_other_parameters(tmp_path):
@@ -136,6 +140,11 @@ def test_parameter_files_apply_in_order_to_the_named_node_in_its_namespace(tmp_p
     b.write_text('/*/rotrod_simulator:\n  ros__parameters:\n    rod_length: 0.35\n')
     assert rod_params_from_files([a, b], namespace='/rod1').rod_length == 0.35
     assert rod_params_from_files([a, b]).rod_length == 0.4        # /* needs one level
+    c = tmp_path / 'c.yaml'
+    c.write_text('/**/rotrod_simulator:\n  ros__parameters:\n    disk_radius: 0.25\n')
+    (cylinder,) = [e for e in ElementTree.fromstring(urdf_for_parameter_files([a, c])).iter(
+        'cylinder') if e.get('length') == '0.01']                 # the disk
+    assert float(cylinder.get('radius')) == 0.25
     bad = tmp_path / 'bad.yaml'
     bad.write_text('- 1\n')
     with pytest.raises(ValueError, match='not a ROS 2 parameter file'):

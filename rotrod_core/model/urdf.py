@@ -172,15 +172,11 @@ def _matches(key: str, full_name: str) -> bool:
     return match(0, 0)
 
 
-def rod_params_from_files(paths, *, node: str = SIMULATOR_NODE,
-                          namespace: str = '/') -> RodParams:
-    """The RodParams of a simulator node from ROS 2 parameter files (``--params-file``).
+def simulator_parameters(paths, *, node: str = SIMULATOR_NODE, namespace: str = '/') -> dict:
+    """The parameters ROS 2 parameter files (``--params-file``) give a node.
 
-    As the node named ``node`` in ``namespace`` gets them, the files applied in order;
-    unset fields keep the defaults (Table 1). A section size of 0 means unused, as for
-    the node.
-
-    Raises ValueError for a file that is not a parameter file, or bad values.
+    As the node named ``node`` in ``namespace`` gets them, the files applied in order
+    (later ones win). Raises ValueError for a file that is not a parameter file.
     """
     import yaml
 
@@ -199,8 +195,27 @@ def rod_params_from_files(paths, *, node: str = SIMULATOR_NODE,
             params = body.get('ros__parameters') if isinstance(body, dict) else None
             if not isinstance(params, dict):
                 raise ValueError(f'{path}: {key}: no ros__parameters mapping')
-            values.update({k: v for k, v in params.items() if k in ROD_PARAM_NAMES})
+            values.update(params)
+    return values
+
+
+def rod_params_from_files(paths, *, node: str = SIMULATOR_NODE,
+                          namespace: str = '/') -> RodParams:
+    """The RodParams of a simulator node from ROS 2 parameter files (``--params-file``).
+
+    See :func:`simulator_parameters`; unset fields keep the defaults (Table 1). A
+    section size of 0 means unused, as for the node. Raises ValueError for bad values.
+    """
+    given = simulator_parameters(paths, node=node, namespace=namespace)
+    values = {k: v for k, v in given.items() if k in ROD_PARAM_NAMES}
     for name in ('section_width', 'section_thickness'):
         if values.get(name) == 0.0:
             values[name] = None
     return RodParams(**values)
+
+
+def urdf_for_parameter_files(paths, *, namespace: str = '/') -> str:
+    """The URDF of the simulator node the parameter files configure (its disk_radius too)."""
+    values = simulator_parameters(paths, namespace=namespace)
+    return urdf_text(rod_params_from_files(paths, namespace=namespace),
+                     disk_radius=float(values.get('disk_radius', DEFAULT_HUB_RADIUS)))
