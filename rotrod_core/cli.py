@@ -103,7 +103,7 @@ def _initial(args) -> dict:
 
 
 def cmd_simulate(args) -> int:
-    """Run one offline simulation and write CSV or NPZ."""
+    """Run one offline simulation; write CSV or NPZ (-o) and/or a rosbag2 (--bag)."""
     params = _params(args)
     if args.output is None and args.bag is None:
         raise ValueError('nothing to write: give -o FILE.csv|.npz and/or --bag DIR')
