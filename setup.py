@@ -33,14 +33,20 @@ setup(
         ('share/' + PACKAGE, ['package.xml']),
         ('share/' + PACKAGE + '/config', glob('config/*.yaml')),
         ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
+        ('share/' + PACKAGE + '/urdf', glob('urdf/*.urdf')),
     ],
     install_requires=['numpy', 'scipy', 'PyYAML'],
     extras_require={
         # rclpy and the standard messages from PyPI wheels (a ROS install provides them).
         'ros': ['ros-jazzy-rclpy[fastrtps]', 'ros-jazzy-common-interfaces'],
         'viz': ['rerun-sdk', 'matplotlib'],
+        # rosbag2 (MCAP) files of offline runs: rotrod simulate --bag (no rclpy needed)
+        'bag': ['rosbags'],
+        # pytransform3d: the URDF's forward kinematics; mcap, mcap-ros2-support: an
+        # independent reader of the bags (test/test_urdf.py, test/test_bag.py)
         'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff',
-                'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py'],
+                'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py',
+                'pytransform3d', 'mcap', 'mcap-ros2-support'],
     },
     zip_safe=True,
     maintainer='rotrod developers',

@@ -4,7 +4,9 @@ rotrod simulate --profile eq26 -o run.csv
 rotrod simulate --drive torque --torque 0.01 --t-end 10 -o spin.npz
 rotrod frequencies --omega 0 1 2
 rotrod critical-speed --limit 0.003 --eccentricity 0.05 0.1 0.2
+rotrod simulate --profile eq26 -o run.csv --bag run_bag
 rotrod plan --omega 2 --robust 0.1 --residual 1e-6 -o plan.csv
+rotrod urdf --params-file config/table1.yaml -o rotrod.urdf
 rotrod demo
 rotrod reproduce --out out/reproduce
 rotrod analyze --out out/analyze --only campbell coupling
@@ -31,7 +33,7 @@ from rotrod_core.command.profiles import (
     profile_from_options,
 )
 from rotrod_core.model.equations import COUPLINGS
-from rotrod_core.model.params import RodParams
+from rotrod_core.model.params import DEFAULT_HUB_RADIUS, RodParams
 from rotrod_core.offline.simulate import simulate
 
 PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
@@ -101,12 +103,22 @@ def _initial(args) -> dict:
 
 
 def cmd_simulate(args) -> int:
-    """Run one offline simulation and write CSV or NPZ."""
+    """Run one offline simulation; write CSV or NPZ (-o) and/or a rosbag2 (--bag)."""
     params = _params(args)
-    if args.output.suffix.lower() not in ('.csv', '.npz'):
-        raise ValueError(f'-o must end in .csv or .npz, got {str(args.output)!r}')
-    if not args.output.parent.exists():
-        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    if args.output is None and args.bag is None:
+        raise ValueError('nothing to write: give -o FILE.csv|.npz and/or --bag DIR')
+    if args.output is not None:
+        if args.output.suffix.lower() not in ('.csv', '.npz'):
+            raise ValueError(f'-o must end in .csv or .npz, got {str(args.output)!r}')
+        if not args.output.parent.exists():
+            raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    bag_settings = None
+    if args.bag is not None:
+        from rotrod_core.reporting.bag import BagSettings
+        bag_settings = BagSettings(publish_rate=args.bag_rate, namespace=args.bag_namespace,
+                                   frame_prefix=args.bag_frame_prefix)
+        if args.bag.exists():
+            raise ValueError(f'{args.bag} exists: a bag is written into a new directory')
     initial = _initial(args)
     if args.drive == 'velocity':
         if args.torque is not None:
@@ -118,11 +130,24 @@ def cmd_simulate(args) -> int:
             raise ValueError('--drive torque needs --torque Q [N m]')
         run = simulate(params, torque=args.torque, t_end=args.t_end, dt=args.dt,
                        coupling=args.coupling, initial=initial)
-    run.save(args.output)
-    print(f'wrote {args.output} ({len(run.t)} samples, {args.drive} drive, '
-          f'{args.coupling} coupling): max u {1e3 * run.u.max():.6f} mm, '
-          f'v in [{1e3 * run.v.min():.6f}, {1e3 * run.v.max():.6f}] mm, '
-          f'final omega {run.omega[-1]:.6f} rad/s')
+    summary = (f'({len(run.t)} samples, {args.drive} drive, '
+               f'{args.coupling} coupling): max u {1e3 * run.u.max():.6f} mm, '
+               f'v in [{1e3 * run.v.min():.6f}, {1e3 * run.v.max():.6f}] mm, '
+               f'final omega {run.omega[-1]:.6f} rad/s')
+    if args.output is not None:
+        run.save(args.output)
+        print(f'wrote {args.output} {summary}')
+    if bag_settings is not None:
+        from rotrod_core.reporting.bag import write_bag
+        try:
+            counts = write_bag(args.bag, run, bag_settings)
+        except ImportError as exc:
+            print(f'rotrod simulate: no bag: {exc} (pip install rosbags)', file=sys.stderr)
+            return 2
+        size = sum(f.stat().st_size for f in args.bag.iterdir())
+        print(f'wrote rosbag2 (mcap) {args.bag}, {size / 1e6:.1f} MB: '
+              + ', '.join(f'{topic} {n}' for topic, n in counts.items())
+              + f'; play it with: ros2 bag play {args.bag}')
     return 0
 
 
@@ -193,6 +218,29 @@ def cmd_plan(args) -> int:
           f'{plan.peak_deflection:.6g} m, residual {plan.residual_amplitude:.3g} m{band}, '
           f'max |w\'| {plan.max_angular_acceleration:.4g} rad/s^2; wrote {args.output}'
           + (f' and {figure}' if figure is not None else ''))
+    return 0
+
+
+def cmd_urdf(args) -> int:
+    """Write the URDF for the parameter files and options (stdout without -o)."""
+    from rotrod_core.model.urdf import rod_params_from_files, simulator_parameters, urdf_text
+    files = args.params_file or []
+    params = rod_params_from_files(files, namespace=args.namespace)
+    given = {k: getattr(args, k) for k in PARAM_FIELDS if getattr(args, k) is not None}
+    if args.section:
+        given['section'] = args.section
+    disk_radius = args.disk_radius
+    if disk_radius is None:
+        disk_radius = float(simulator_parameters(files, namespace=args.namespace).get(
+            'disk_radius', DEFAULT_HUB_RADIUS))
+    text = urdf_text(params.replace(**given), disk_radius=disk_radius)
+    if args.output is None:
+        sys.stdout.write(text)
+        return 0
+    if not args.output.parent.exists():
+        raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
+    args.output.write_text(text)
+    print(f'wrote {args.output}')
     return 0
 
 
@@ -271,7 +319,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help='initial state: u, v [m], du, dv [m/s], theta [rad], omega [rad/s]')
     p.add_argument('--t-end', type=_finite, default=40.0, help='duration [s] (default 40)')
     p.add_argument('--dt', type=_finite, default=1e-3, help='step [s] (default 0.001)')
-    p.add_argument('-o', '--output', type=Path, required=True, help='FILE.csv or FILE.npz')
+    p.add_argument('-o', '--output', type=Path, help='FILE.csv or FILE.npz')
+    g = p.add_argument_group('rosbag2 (MCAP) of the run, as the simulator node publishes it '
+                             '(docs/ros_integration.md)')
+    g.add_argument('--bag', type=Path, metavar='DIR', help='bag directory to create')
+    g.add_argument('--bag-rate', type=_finite, default=100.0, metavar='HZ',
+                   help="the node's publish_rate [Hz of simulated time] (default 100)")
+    g.add_argument('--bag-namespace', default='/', metavar='NS',
+                   help='namespace of the topics, e.g. /offline (default /)')
+    g.add_argument('--bag-frame-prefix', default='', metavar='PREFIX',
+                   help="prefix of the frame ids world and rotor, as the node's frame_prefix")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser('frequencies', help='dynamic frequencies at constant speeds (Eq. 28)')
@@ -310,6 +367,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('-o', '--output', type=Path, required=True,
                    help='FILE.csv (the figure goes beside it as FILE.png)')
     p.set_defaults(func=cmd_plan)
+
+    p = sub.add_parser('urdf', help='the URDF of the rod on its disk for the given '
+                                    "parameters (robot_state_publisher's robot_description)")
+    p.add_argument('--params-file', type=Path, action='append', metavar='FILE',
+                   help="the simulator's ROS 2 parameter file(s), applied in order; the "
+                        'options below override them')
+    p.add_argument('--namespace', default='/',
+                   help='namespace of the simulator node whose parameters apply (default /)')
+    _add_params(p)
+    p.add_argument('--disk-radius', type=_finite, default=None,
+                   help="radius of the drawn disk [m] (default: the files' disk_radius, "
+                        f'else {DEFAULT_HUB_RADIUS:g})')
+    p.add_argument('-o', '--output', type=Path, help='FILE.urdf (default: stdout)')
+    p.set_defaults(func=cmd_urdf)
 
     p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
                                     'to a Rerun recording, with a stage summary')

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 
 from builtin_interfaces.msg import Time
@@ -13,18 +12,18 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import ColorRGBA, Float64MultiArray, Header, MultiArrayDimension
 from visualization_msgs.msg import Marker, MarkerArray
 
-HUB_JOINT = 'hub'
-FREQUENCY_LABEL = 'f1_f2_hz'
-"""Label of the single dimension of ``frequencies``: [f1, f2] in Hz, f1 <= f2."""
+from rotrod_core.model import interface
+from rotrod_core.model.interface import FREQUENCY_LABEL, JOINT_NAMES, joint_values, stamp_parts
+from rotrod_core.model.scene import scene
+
+HUB_JOINT = interface.HUB_JOINT
+"""The hub's joint name in joint_states (the nodes that read it look it up by name)."""
 
 
 def stamp(seconds: float) -> Time:
     """builtin_interfaces/Time for a time in seconds (>= 0)."""
-    sec = math.floor(seconds)
-    nanosec = int(round((seconds - sec) * 1e9))
-    if nanosec >= 1_000_000_000:
-        sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return Time(sec=int(sec), nanosec=nanosec)
+    sec, nanosec = stamp_parts(seconds)
+    return Time(sec=sec, nanosec=nanosec)
 
 
 def to_seconds(t: Time) -> float:
@@ -37,10 +36,15 @@ def header(t: Time, frame_id: str = '') -> Header:
     return Header(stamp=t, frame_id=frame_id)
 
 
-def joint_state(t: Time, theta: float, omega: float, torque: float) -> JointState:
-    """The hub joint: position theta (rad), velocity w (rad/s), effort Q (N m)."""
-    return JointState(header=header(t), name=[HUB_JOINT], position=[float(theta)],
-                      velocity=[float(omega)], effort=[float(torque)])
+def joint_state(t: Time, state, torque: float) -> JointState:
+    """The joints of the URDF (:data:`JOINT_NAMES`) for a state; ``torque`` in N m.
+
+    hub: theta rad, w rad/s, hub torque N m; tip_radial, tip_tangential: u, v m and
+    u', v' m/s, effort 0 (passive). See :func:`rotrod_core.model.interface.joint_values`.
+    """
+    position, velocity, effort = joint_values(state, torque)
+    return JointState(header=header(t), name=list(JOINT_NAMES), position=position,
+                      velocity=velocity, effort=effort)
 
 
 def deflection(t: Time, u: float, v: float, frame_id: str) -> Vector3Stamped:
@@ -78,53 +82,26 @@ def diagnostics(t: Time, name: str, hardware_id: str, level: int, message: str,
     return DiagnosticArray(header=header(t), status=[status])
 
 
-def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
-    return ColorRGBA(r=r, g=g, b=b, a=a)
-
-
-def _points(rows) -> list:
-    return [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in rows]
-
-
 def markers(t: Time, frame_id: str, ns: str, *, disk_radius: float, theta: float,
             rod: Sequence[Sequence[float]], rod_diameter: float, mass_radius: float,
             trail: Iterable[Sequence[float]]) -> MarkerArray:
     """Disk (with a radial line at the rod's root, which turns with it), rod, mass, trail.
 
     ``rod`` is the drawn centreline (root to tip, m, frame ``frame_id``); ``trail`` the
-    recent drawn tip positions.
+    recent drawn tip positions. The shapes are :func:`rotrod_core.model.scene.scene`'s.
     """
     h = header(t, frame_id)
-    disk = Marker(header=h, ns=ns, id=0, type=Marker.CYLINDER, action=Marker.ADD)
-    disk.pose.position.z = -0.005
-    disk.pose.orientation.w = 1.0
-    disk.scale.x = disk.scale.y = 2.0 * disk_radius
-    disk.scale.z = 0.01
-    disk.color = _color(0.6, 0.6, 0.65)
-    spoke = Marker(header=h, ns=ns, id=1, type=Marker.LINE_LIST, action=Marker.ADD)
-    spoke.pose.orientation.w = 1.0
-    spoke.scale.x = 0.004
-    spoke.color = _color(0.15, 0.15, 0.2)
-    spoke.points = _points([(0.0, 0.0, 0.001),
-                            (disk_radius * math.cos(theta), disk_radius * math.sin(theta),
-                             0.001)])
-    rod_m = Marker(header=h, ns=ns, id=2, type=Marker.LINE_STRIP, action=Marker.ADD)
-    rod_m.pose.orientation.w = 1.0
-    rod_m.scale.x = max(rod_diameter, 0.002)
-    rod_m.color = _color(0.2, 0.4, 0.9)
-    rod_m.points = _points(rod)
-    mass = Marker(header=h, ns=ns, id=3, type=Marker.SPHERE, action=Marker.ADD)
-    tip = rod[-1]
-    mass.pose.position = Point(x=float(tip[0]), y=float(tip[1]), z=float(tip[2]))
-    mass.pose.orientation.w = 1.0
-    mass.scale.x = mass.scale.y = mass.scale.z = 2.0 * mass_radius
-    mass.color = _color(0.9, 0.3, 0.1)
-    trail_m = Marker(header=h, ns=ns, id=4, type=Marker.LINE_STRIP, action=Marker.ADD)
-    trail_m.pose.orientation.w = 1.0
-    trail_m.scale.x = 0.002
-    trail_m.color = _color(0.9, 0.6, 0.1, 0.8)
-    trail_m.points = _points(trail)
-    out = [disk, spoke, rod_m, mass]
-    if len(trail_m.points) >= 2:
-        out.append(trail_m)
+    out = []
+    for shape in scene(disk_radius=disk_radius, theta=theta, rod=rod,
+                       rod_diameter=rod_diameter, mass_radius=mass_radius, trail=trail):
+        m = Marker(header=h, ns=ns, id=shape.id, type=getattr(Marker, shape.kind.upper()),
+                   action=Marker.ADD)
+        m.pose.position = Point(x=shape.position[0], y=shape.position[1],
+                                z=shape.position[2])
+        m.pose.orientation.w = 1.0
+        m.scale.x, m.scale.y, m.scale.z = shape.scale
+        m.color = ColorRGBA(r=shape.color[0], g=shape.color[1], b=shape.color[2],
+                            a=shape.color[3])
+        m.points = [Point(x=x, y=y, z=z) for x, y, z in shape.points]
+        out.append(m)
     return MarkerArray(markers=out)

@@ -11,6 +11,8 @@ Subscriptions:
   and torque drive sets the torque to 0; /diagnostics WARN until a command comes.
 Publications (every 1/publish_rate of simulated time):
   joint_states    sensor_msgs/JointState       joint 'hub': theta rad, w rad/s, torque N m
+                  and the URDF's tip joints 'tip_radial', 'tip_tangential': u, v m,
+                  u', v' m/s (the true state: no noise), effort 0
   tip/deflection  geometry_msgs/Vector3Stamped (u, v, 0) m in frame 'rotor' (rotating),
                   plus Gaussian noise of deflection_noise m (a sensor's; 0 by default)
   tip/position    geometry_msgs/PointStamped   mass position, m, in frame 'world'
@@ -570,7 +572,7 @@ class SimulatorNode(Node):
         if settings.deflection_noise:              # a sensor's noise: the state is untouched
             du, dv = self._noise.normal(0.0, settings.deflection_noise, 2)
             u, v = u + float(du), v + float(dv)
-        self._pub_joint.publish(messages.joint_state(s.stamp, st.theta, st.omega, s.torque))
+        self._pub_joint.publish(messages.joint_state(s.stamp, st, s.torque))
         self._pub_deflection.publish(messages.deflection(s.stamp, u, v, self._rotor_frame))
         self._pub_position.publish(messages.position(s.stamp, s.position, self._world_frame))
         self._pub_frequencies.publish(messages.frequencies(*s.frequencies))

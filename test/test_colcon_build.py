@@ -12,8 +12,9 @@ sourced) and from a directory outside the repository:
   compared with the installed ``entry_points.txt``) is an executable
   ``<prefix>/lib/rotrod/<name>`` that runs ``--help`` with exit status 0, importing only
   installed ``rotrod_*`` modules;
-* ``share/rotrod/package.xml``, ``share/rotrod/config/`` (with every ``config/*.yaml``) and
-  the ament resource marker ``share/ament_index/resource_index/packages/rotrod`` exist.
+* ``share/rotrod/package.xml``, ``share/rotrod/config/`` (with every ``config/*.yaml``),
+  ``share/rotrod/urdf/rotrod.urdf`` and the ament resource marker
+  ``share/ament_index/resource_index/packages/rotrod`` exist.
 """
 
 import configparser
@@ -223,6 +224,9 @@ def test_data_files_installed(colcon_install):
     source_configs = {p.name for p in (ROOT / 'config').glob('*.yaml')}
     installed_configs = {p.name for p in (share / 'config').glob('*.yaml')}
     assert installed_configs == source_configs
+    assert {p.name for p in (share / 'urdf').glob('*.urdf')} == {'rotrod.urdf'}
+    urdf = Path('urdf') / 'rotrod.urdf'
+    assert (share / urdf).read_text() == (ROOT / urdf).read_text()
     marker = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages' / PACKAGE
     assert marker.is_file()
 

@@ -12,7 +12,7 @@ from reference import R0, D, E, L, M
 from rotrod_core import RodParams
 from rotrod_core.live.engine import EngineConfig
 from rotrod_core.live.pacing import Pacer, StampClock
-from rotrod_core.model.equations import Coefficients, inertial_position
+from rotrod_core.model.equations import Coefficients, State, inertial_position
 from rotrod_core.model.geometry import cantilever_shape, rod_centerline, sphere_radius
 from rotrod_ros import messages
 from rotrod_ros.parameters import (
@@ -123,8 +123,11 @@ def test_stamp_round_trip(t):
 
 def test_messages_carry_units_frames_and_labels():
     t = messages.stamp(1.25)
-    js = messages.joint_state(t, 0.5, 2.0, -0.01)
-    assert list(js.name) == ['hub'] and js.velocity[0] == 2.0 and js.effort[0] == -0.01
+    js = messages.joint_state(t, State(1e-3, -2e-4, 0.01, -0.02, 0.5, 2.0), -0.01)
+    assert list(js.name) == ['hub', 'tip_radial', 'tip_tangential']
+    assert list(js.position) == [0.5, 1e-3, -2e-4]
+    assert list(js.velocity) == [2.0, 0.01, -0.02]
+    assert list(js.effort) == [-0.01, 0.0, 0.0]             # the tip joints are passive
     d = messages.deflection(t, 1e-3, -2e-4, 'rotor')
     assert d.header.frame_id == 'rotor' and (d.vector.x, d.vector.y, d.vector.z) == (
         1e-3, -2e-4, 0.0)

@@ -7,5 +7,6 @@
 - analyze: rotrod analyze
 - output: output directories and progress
 - recording: Rerun recordings
+- bag: rosbag2 (MCAP) files of offline runs, as the simulator node publishes them
 - rig_comparison: the real rig beside the idealisation
 """

@@ -1,0 +1,92 @@
+"""The simulator's names and conventions on the outside: frames, joints, topics, stamps.
+
+One source for the live node's messages (``rotrod_ros.messages``), the URDF
+(:mod:`rotrod_core.model.urdf`) and the rosbag2 writer of offline runs
+(:mod:`rotrod_core.reporting.bag`), so that a live run, its ``/tf`` and a bag agree.
+
+Frames (URDF links; ``robot_state_publisher`` turns ``joint_states`` into ``/tf``)::
+
+    world --hub (continuous, about z: theta)--> rotor
+      rotor --rod_mount (fixed, at (r0, 0, 0))--> rod_root
+        rod_root --tip_radial (prismatic along x: u, at height l)--> tip_radial_link
+          tip_radial_link --tip_tangential (prismatic along y: v)--> tip
+
+``world`` is inertial; ``rotor`` turns with the hub (x radial through the rod's root, y
+tangential, z up the axis), the frame of ``tip/deflection``; ``tip`` is the mass, at
+(r0 + u, v, l) in ``rotor``: ``tip/position`` in ``world``.
+"""
+
+from __future__ import annotations
+
+import math
+
+WORLD_FRAME = 'world'
+"""The inertial frame: tip/position and the markers."""
+ROTOR_FRAME = 'rotor'
+"""The rotating frame of the hub (the disk link): tip/deflection."""
+ROD_ROOT_FRAME = 'rod_root'
+"""The rod's root on the disk, at (r0, 0, 0) in the rotor frame."""
+TIP_RADIAL_FRAME = 'tip_radial_link'
+"""Between the two tip joints: at (r0 + u, 0, l) in the rotor frame."""
+TIP_FRAME = 'tip'
+"""The mass: at (r0 + u, v, l) in the rotor frame."""
+
+HUB_JOINT = 'hub'
+"""Continuous joint world -> rotor about z: position theta rad, velocity w rad/s,
+effort the hub torque N m (in velocity drive, the torque the drive must supply)."""
+ROD_MOUNT_JOINT = 'rod_mount'
+"""Fixed joint rotor -> rod_root."""
+TIP_RADIAL_JOINT = 'tip_radial'
+"""Prismatic joint along the rotor's x: position u m, velocity u' m/s."""
+TIP_TANGENTIAL_JOINT = 'tip_tangential'
+"""Prismatic joint along the rotor's y: position v m, velocity v' m/s."""
+JOINT_NAMES = (HUB_JOINT, TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT)
+"""The joints in ``joint_states``, in this order."""
+
+FREQUENCY_LABEL = 'f1_f2_hz'
+"""Label of the single dimension of ``frequencies``: [f1, f2] in Hz, f1 <= f2."""
+MARKER_NAMESPACE = 'rotrod'
+"""The ``ns`` of the markers."""
+
+TOPICS = {
+    'joint_states': 'sensor_msgs/msg/JointState',
+    'tip/deflection': 'geometry_msgs/msg/Vector3Stamped',
+    'tip/position': 'geometry_msgs/msg/PointStamped',
+    'frequencies': 'std_msgs/msg/Float64MultiArray',
+    'frequencies/estimate': 'std_msgs/msg/Float64MultiArray',
+    'markers': 'visualization_msgs/msg/MarkerArray',
+    '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
+    '/clock': 'rosgraph_msgs/msg/Clock',
+}
+"""What the simulator node publishes: topic (relative to its namespace unless it starts
+with /) -> message type."""
+
+
+def joint_values(state, torque: float) -> tuple:
+    """(positions, velocities, efforts) of :data:`JOINT_NAMES` for a state, SI units.
+
+    ``state`` has u, v, du, dv, theta, omega (:class:`rotrod_core.model.equations.State`);
+    ``torque`` is the hub torque, N m. The tip joints are passive (the rod's elastic and
+    inertial forces are internal to the model): their effort is 0.
+    """
+    return ((float(state.theta), float(state.u), float(state.v)),
+            (float(state.omega), float(state.du), float(state.dv)),
+            (float(torque), 0.0, 0.0))
+
+
+def stamp_parts(seconds: float) -> tuple:
+    """(sec, nanosec) of builtin_interfaces/Time for a time in seconds (>= 0).
+
+    nanosec is the rounded fraction, carried into sec at 1e9.
+    """
+    sec = math.floor(seconds)
+    nanosec = int(round((seconds - sec) * 1e9))
+    if nanosec >= 1_000_000_000:
+        sec, nanosec = sec + 1, nanosec - 1_000_000_000
+    return int(sec), nanosec
+
+
+def stamp_nanoseconds(seconds: float) -> int:
+    """The same instant as :func:`stamp_parts`, in integer nanoseconds."""
+    sec, nanosec = stamp_parts(seconds)
+    return sec * 1_000_000_000 + nanosec

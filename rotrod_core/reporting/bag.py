@@ -1,0 +1,302 @@
+"""rosbag2 files (MCAP storage, Jazzy's default) of offline runs, with ``rosbags``.
+
+``rotrod simulate ... --bag DIR`` writes the run as the live simulator would have
+published it at ``publish_rate``, faster than real time (stamps in simulated seconds
+from 0, as with ``/clock``): the same topics, types, frame ids, joint names, labels and
+stamps, built from the same sources (:mod:`rotrod_core.model.interface`,
+:mod:`rotrod_core.model.scene`), so that ``ros2 bag play DIR`` replays it beside a live
+run and Foxglove or Rerun open it. Each message's log time is its stamp.
+
+Topics (names relative to ``namespace``, as the node's; types as
+:data:`~rotrod_core.model.interface.TOPICS`):
+
+    joint_states           hub theta, w, hub torque; tip_radial, tip_tangential u, v, u', v'
+    tip/deflection         (u, v, 0) m in frame ``rotor`` (no sensor noise: the state)
+    tip/position           the mass in frame ``world``, m
+    frequencies            [f1, f2] Hz at the sample's w (Eq. 28 / eigen analysis)
+    frequencies/estimate   the whirl estimate from the published (u, v), as the node's
+    markers                disk, rod, mass, trail at ``marker_rate`` (``markers=False``: none)
+    /clock                 simulated time at each publication
+
+Left out: ``/diagnostics``, the live session's health (command timeouts, pauses,
+halts and their alarms belong to a running node; an offline run has no commands).
+
+``rosbags`` (pure Python, its own type store: no rclpy) is imported when a bag is
+written, not with this module, so the core does not need it.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rotrod_core.analysis.modes import dynamic_frequencies
+from rotrod_core.estimation.whirl import WhirlEstimator
+from rotrod_core.model import interface
+from rotrod_core.model.equations import State
+from rotrod_core.model.geometry import rod_centerline, sphere_radius
+from rotrod_core.model.params import DEFAULT_HUB_RADIUS
+from rotrod_core.model.scene import scene
+
+STORAGE = 'mcap'
+VERSION = 9
+"""rosbag2 metadata version written by Jazzy's ``ros2 bag record``."""
+QOS_DEPTH = 10
+"""History depth of the node's publishers (reliable, volatile: rclpy's default)."""
+INFINITE = (9223372036, 854775807)
+"""rmw's infinite duration (sec, nsec), as ``ros2 bag record`` writes a default QoS."""
+BAG_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
+              'frequencies/estimate', 'markers', '/clock')
+"""The node's topics a bag holds, in the order the node publishes one sample's."""
+
+
+@dataclass(frozen=True)
+class BagSettings:
+    """How the run is published; the defaults are the simulator node's parameters'."""
+
+    publish_rate: float = 100.0
+    """Publications per second of simulated time, Hz (a whole number of run steps)."""
+    markers: bool = True
+    marker_rate: float = 20.0
+    """Hz of simulated time (every round(publish_rate / marker_rate)-th publication)."""
+    marker_trail_length: int = 200
+    marker_deflection_scale: float = 20.0
+    disk_radius: float = DEFAULT_HUB_RADIUS
+    """m, as drawn."""
+    estimate_window: float = 1.0
+    """s; 0 = no frequencies/estimate."""
+    estimate_rate: float = 10.0
+    """Hz of simulated time."""
+    clock: bool = True
+    """Write /clock."""
+    frame_prefix: str = ''
+    """Prefix of the frame ids world and rotor (e.g. 'rod1/'), as the node's parameter."""
+    namespace: str = '/'
+    """Namespace of the topics (e.g. '/offline', to play beside a live run in /)."""
+
+    def __post_init__(self):
+        for name in ('publish_rate', 'marker_rate', 'estimate_rate'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise ValueError(f'{name} must be a finite number > 0 Hz, got {value!r}')
+        if not (np.isfinite(self.estimate_window) and self.estimate_window >= 0):
+            raise ValueError(f'estimate_window must be >= 0 s, got {self.estimate_window!r}')
+        if self.estimate_rate > self.publish_rate:
+            raise ValueError(f'estimate_rate {self.estimate_rate:g} Hz exceeds publish_rate '
+                             f'{self.publish_rate:g} Hz')
+        if not self.namespace.startswith('/'):
+            raise ValueError(f'namespace must start with /, got {self.namespace!r}')
+
+    def topic(self, name: str) -> str:
+        """The full topic name of one of the node's topics."""
+        if name.startswith('/'):
+            return name
+        return '/'.join(['', *[p for p in self.namespace.split('/') if p], name])
+
+
+def publication_indices(t: np.ndarray, publish_rate: float) -> np.ndarray:
+    """Indices of the run's samples at k / publish_rate, k = 0, 1, ... (the node's grid).
+
+    Raises ValueError unless the publish period is a whole number of the run's steps.
+    """
+    if len(t) < 2:
+        return np.arange(len(t))
+    dt = float(t[1] - t[0])
+    period = 1.0 / publish_rate
+    every = int(round(period / dt))
+    if every < 1 or abs(every * dt - period) > 1e-9 * period:
+        raise ValueError(f'the publish period 1/{publish_rate:g} s is not a whole number of '
+                         f'the run\'s steps ({dt:g} s)')
+    return np.arange(0, len(t), every)
+
+
+class _Messages:
+    """rosbags message objects (its type store for Jazzy), with the node's conventions."""
+
+    def __init__(self):
+        from rosbags.interfaces import Nodetype
+        from rosbags.typesys import Stores, get_typestore
+        self.store = get_typestore(Stores.ROS2_JAZZY)
+        self._nodetype = Nodetype
+
+    def make(self, msgtype: str, **fields):
+        """A message of ``msgtype`` with ``fields``; the others zero or empty."""
+        cls = self.store.types[msgtype]
+        _, defs = self.store.fielddefs[msgtype]
+        values = {name: fields[name] if name in fields else self._default(node)
+                  for name, node in defs}
+        unknown = set(fields) - set(values)
+        if unknown:
+            raise ValueError(f'{msgtype} has no field(s) {sorted(unknown)}')
+        return cls(**values)
+
+    def _default(self, node):
+        kind, detail = node
+        nt = self._nodetype
+        if kind == nt.BASE:
+            base = detail[0]
+            if base == 'string':
+                return ''
+            if base == 'bool':
+                return False
+            return 0.0 if base.startswith('float') else 0
+        if kind == nt.NAME:
+            return self.make(detail)
+        sub, count = detail
+        if sub[0] == nt.BASE and sub[1][0] not in ('string', 'bool'):
+            dtype = {'float32': np.float32, 'float64': np.float64, 'byte': np.uint8,
+                     'char': np.uint8}.get(sub[1][0], sub[1][0])
+            return np.zeros(count if kind == nt.ARRAY else 0, dtype=dtype)
+        return [self._default(sub) for _ in range(count)] if kind == nt.ARRAY else []
+
+    def time(self, seconds: float):
+        sec, nanosec = interface.stamp_parts(seconds)
+        return self.make('builtin_interfaces/msg/Time', sec=sec, nanosec=nanosec)
+
+    def header(self, stamp, frame_id: str = ''):
+        return self.make('std_msgs/msg/Header', stamp=stamp, frame_id=frame_id)
+
+    def point(self, xyz):
+        return self.make('geometry_msgs/msg/Point', x=float(xyz[0]), y=float(xyz[1]),
+                         z=float(xyz[2]))
+
+    def joint_state(self, stamp, state: State, torque: float):
+        position, velocity, effort = interface.joint_values(state, torque)
+        return self.make('sensor_msgs/msg/JointState', header=self.header(stamp),
+                         name=list(interface.JOINT_NAMES),
+                         position=np.array(position), velocity=np.array(velocity),
+                         effort=np.array(effort))
+
+    def deflection(self, stamp, u: float, v: float, frame_id: str):
+        vector = self.make('geometry_msgs/msg/Vector3', x=float(u), y=float(v), z=0.0)
+        return self.make('geometry_msgs/msg/Vector3Stamped',
+                         header=self.header(stamp, frame_id), vector=vector)
+
+    def position(self, stamp, xyz, frame_id: str):
+        return self.make('geometry_msgs/msg/PointStamped', header=self.header(stamp, frame_id),
+                         point=self.point(xyz))
+
+    def frequencies(self, f1: float, f2: float):
+        dim = self.make('std_msgs/msg/MultiArrayDimension', label=interface.FREQUENCY_LABEL,
+                        size=2, stride=2)
+        layout = self.make('std_msgs/msg/MultiArrayLayout', dim=[dim], data_offset=0)
+        return self.make('std_msgs/msg/Float64MultiArray', layout=layout,
+                         data=np.array([float(f1), float(f2)]))
+
+    def clock(self, stamp):
+        return self.make('rosgraph_msgs/msg/Clock', clock=stamp)
+
+    def markers(self, stamp, frame_id: str, shapes):
+        out = []
+        cls = self.store.types['visualization_msgs/msg/Marker']
+        for shape in shapes:
+            pose = self.make('geometry_msgs/msg/Pose', position=self.point(shape.position),
+                             orientation=self.make('geometry_msgs/msg/Quaternion', w=1.0))
+            scale = self.make('geometry_msgs/msg/Vector3', x=float(shape.scale[0]),
+                              y=float(shape.scale[1]), z=float(shape.scale[2]))
+            r, g, b, a = (float(c) for c in shape.color)
+            out.append(self.make(
+                'visualization_msgs/msg/Marker', header=self.header(stamp, frame_id),
+                ns=interface.MARKER_NAMESPACE, id=shape.id,
+                type=getattr(cls, shape.kind.upper()), action=cls.ADD, pose=pose,
+                scale=scale, color=self.make('std_msgs/msg/ColorRGBA', r=r, g=g, b=b, a=a),
+                points=[self.point(p) for p in shape.points]))
+        return self.make('visualization_msgs/msg/MarkerArray', markers=out)
+
+
+def _qos():
+    from rosbags.interfaces import (
+        Qos,
+        QosDurability,
+        QosHistory,
+        QosLiveliness,
+        QosReliability,
+        QosTime,
+    )
+    forever = QosTime(*INFINITE)
+    return Qos(QosHistory.KEEP_LAST, QOS_DEPTH, QosReliability.RELIABLE,
+               QosDurability.VOLATILE, forever, forever, QosLiveliness.AUTOMATIC, forever,
+               False)
+
+
+def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dict:
+    """Write an offline run (:class:`~rotrod_core.offline.result.SimulationResult`).
+
+    ``path`` is the bag's directory (it must not exist: rosbag2 does not overwrite).
+    Returns the number of messages per full topic name.
+    """
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    settings = settings or BagSettings()
+    path = Path(path)
+    if path.exists():
+        raise ValueError(f'{path} exists: a bag is written into a new directory')
+    if not path.parent.is_dir():
+        raise ValueError(f'directory {str(path.parent)!r} does not exist')
+    keep = publication_indices(np.asarray(run.t), settings.publish_rate)
+    f1, f2 = dynamic_frequencies(run.params, run.omega[keep])
+    f1, f2 = np.broadcast_to(f1, keep.shape), np.broadcast_to(f2, keep.shape)
+    world = settings.frame_prefix + interface.WORLD_FRAME
+    rotor = settings.frame_prefix + interface.ROTOR_FRAME
+    height = float(run.params.rod_length)
+    marker_every = max(1, round(settings.publish_rate / settings.marker_rate))
+    trail: deque = deque(maxlen=max(1, settings.marker_trail_length))
+    estimator = (WhirlEstimator(settings.estimate_window, 1.0 / settings.publish_rate,
+                                1.0 / settings.estimate_rate)
+                 if settings.estimate_window else None)
+    mass_radius = sphere_radius(float(run.params.mass))
+    rod_diameter = float(run.params.rod_diameter)
+
+    msgs = _Messages()
+    writer = Writer(path, version=VERSION, storage_plugin=StoragePlugin.MCAP)
+    writer.open()
+    try:
+        topics = [t for t in BAG_TOPICS if (t != 'markers' or settings.markers)
+                  and (t != 'frequencies/estimate' or estimator is not None)
+                  and (t != '/clock' or settings.clock)]
+        qos = _qos()
+        connections = {t: writer.add_connection(settings.topic(t), interface.TOPICS[t],
+                                                typestore=msgs.store, offered_qos_profiles=[qos])
+                       for t in topics}
+        counts = dict.fromkeys(topics, 0)
+
+        def write(topic: str, ns: int, msg) -> None:
+            if topic in connections:
+                conn = connections[topic]
+                writer.write(conn, ns, msgs.store.serialize_cdr(msg, conn.msgtype))
+                counts[topic] += 1
+
+        for j, i in enumerate(keep):
+            t = float(run.t[i])
+            ns = interface.stamp_nanoseconds(t)
+            stamp = msgs.time(t)
+            state = State(*(float(x[i]) for x in (run.u, run.v, run.du, run.dv, run.theta,
+                                                  run.omega)))
+            write('joint_states', ns, msgs.joint_state(stamp, state, float(run.torque[i])))
+            write('tip/deflection', ns, msgs.deflection(stamp, state.u, state.v, rotor))
+            write('tip/position', ns, msgs.position(stamp, (run.x[i], run.y[i], height),
+                                                    world))
+            write('frequencies', ns, msgs.frequencies(f1[j], f2[j]))
+            write('/clock', ns, msgs.clock(stamp))
+            if estimator is not None:
+                estimate = estimator.push(t, state.u, state.v)
+                if estimate is not None:
+                    write('frequencies/estimate', ns,
+                          msgs.frequencies(estimate.f1, estimate.f2))
+            if settings.markers and (j + 1) % marker_every == 0:
+                rod = rod_centerline(run.params, state.u, state.v, state.theta,
+                                     scale=settings.marker_deflection_scale)
+                trail.append(tuple(rod[-1]))
+                write('markers', ns, msgs.markers(stamp, world, scene(
+                    disk_radius=settings.disk_radius, theta=state.theta, rod=rod,
+                    rod_diameter=rod_diameter, mass_radius=mass_radius, trail=list(trail))))
+    except BaseException:
+        writer.abort()
+        shutil.rmtree(path, ignore_errors=True)     # no half-written bag left behind
+        raise
+    writer.close()
+    return {settings.topic(t): n for t, n in counts.items()}
