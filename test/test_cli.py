@@ -98,11 +98,11 @@ def test_plan_refusal_is_a_clear_error(tmp_path, capsys):
 
 
 @pytest.mark.parametrize('argv, omega_end', [
-    (['--profile', 'eq26', '--period', '3', '--omega-max', '1.5'], 0.0),
+    (['--profile', 'eq26', '--period', '3', '--omega-target', '1.5'], 0.0),
     (['--profile', 'constant', '--omega', '1.5'], 1.5),
-    (['--profile', 'step', '--omega-max', '1.5', '--omega-before', '0.5', '--t-step', '1'],
+    (['--profile', 'step', '--omega-target', '1.5', '--omega-start', '0.5', '--t-step', '1'],
      1.5),
-    (['--profile', 'ramp', '--omega-max', '1.5', '--ramp-time', '2', '--t-start', '1'], 1.5),
+    (['--profile', 'ramp', '--omega-target', '1.5', '--ramp-time', '2', '--t-start', '1'], 1.5),
     # w = offset + amplitude sin(2 pi (f_start t + (f_end - f_start) t^2 / (2 T))) for
     # t <= T (here the phase at T is 2 pi x 3: back to the offset)
     (['--profile', 'sine_sweep', '--amplitude', '0.3', '--f-start', '1', '--f-end', '2',
