@@ -9,6 +9,7 @@ how long Q_i acted.
 
 import heapq
 import itertools
+import sys
 import threading
 import time
 
@@ -71,13 +72,21 @@ class FakeClock:
 
 
 class Logger:
-    """Collects (level, message)."""
+    """Collects (level, message); like rclpy's logger, refuses a call site (file and
+    line of the caller) that logs at two severities."""
 
     def __init__(self):
         self.lines = []
+        self.sites = {}
 
     def __getattr__(self, level):
-        return lambda message: self.lines.append((level, message))
+        def log(message):
+            caller = sys._getframe(1)
+            site = (caller.f_code.co_filename, caller.f_lineno)
+            if self.sites.setdefault(site, level) != level:
+                raise ValueError('Logger severity cannot be changed between calls.')
+            self.lines.append((level, message))
+        return log
 
     def count(self, text: str) -> int:
         return sum(text in message for _, message in self.lines)

@@ -231,7 +231,11 @@ class RealTimeLoop:
             if now < self._quiet_until.get(key, -1.0):
                 return
             self._quiet_until[key] = now + throttle
-        getattr(self._logger, level)(message)
+        # one call site per severity: rclpy's logger binds a call site to one
+        if level == 'info':
+            self._logger.info(message)
+        else:
+            self._logger.warning(message)
 
     # ----------------------------------------------------------------- timing
     @property
