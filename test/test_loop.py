@@ -9,12 +9,14 @@ how long Q_i acted.
 
 import heapq
 import itertools
+import struct
 import sys
 import threading
 import time
 
 import pytest
 
+import rotrod_core.live.scheduling as scheduling
 from rotrod_core.live.engine import ERROR, OK, EngineConfig, SimulationEngine
 from rotrod_core.live.loop import (
     IDLE_WAIT,
@@ -433,3 +435,44 @@ def test_the_thread_on_the_system_clock_publishes_in_real_time_and_stops():
     assert 40 <= n <= 52                          # 100 Hz for 0.5 s
     late = [sent - s.due for sent, s in published]
     assert min(late) >= 0                         # never before its time
+
+
+# ----------------------------------------------------------------- scheduling
+
+def test_real_time_priority_while_paced_only_and_the_clock_starts_after_the_change(
+        monkeypatch):
+    asked = []
+
+    def slow(priority, logger, what):           # the change and its logging take 60 ms
+        asked.append(priority)
+        run.clock.advance(0.06)
+        return priority != 40                   # 40 is refused
+
+    monkeypatch.setattr(scheduling, 'run_current_thread_at', slow)
+    run = Run(realtime_priority=30)
+    run.until_wall(0.3)
+    assert asked == [30]
+    # the pacing starts after the change: no publication late, none in a burst
+    assert all(sent == s.due for sent, s in run.samples)
+    assert run.samples[0][1].due == pytest.approx(START + 0.06, abs=1e-9)
+    fast = LoopSettings(real_time_factor=0.0, realtime_priority=30)
+    run.loop.reconfigure(run.engine.config, fast)
+    run.loop.cycle()
+    run.loop.reconfigure(run.engine.config, LoopSettings(realtime_priority=40))
+    run.until_wall(run.clock.now - START + 0.1)
+    run.until_wall(run.clock.now - START + 0.1)
+    assert asked == [30, 0, 40]                 # ordinary as fast as possible; 40 once
+
+
+def test_the_cpu_latency_request_is_held_as_asked_and_released(tmp_path):
+    device = tmp_path / 'cpu_dma_latency'
+    device.write_bytes(b'')
+    log = Logger()
+    held = scheduling.ThreadScheduling(log, 'test thread', device=str(device))
+    assert held.update(0, 0) and device.read_bytes() == struct.pack('=i', 0)
+    assert not held.update(0, 0)                # nothing changes, nothing said
+    assert held.update(0, -1)
+    assert log.count('idle CPUs wake within 0 us') == 1 and log.count('released') == 1
+    missing = scheduling.ThreadScheduling(log, 'test thread', str(tmp_path / 'none'))
+    assert missing.update(0, 5) and not missing.update(0, 5)    # refused once, not again
+    assert log.count('cannot hold a CPU wake-up latency of 5 us') == 1

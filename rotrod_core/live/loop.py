@@ -201,10 +201,7 @@ class RealTimeLoop:
         self.overruns = 0
         """Times the thread fell more than MAX_BACKLOG behind and skipped ahead."""
         self.failure: str | None = None
-        self._priority = 0
-        self._priority_refused: int | None = None
-        self._cpu_latency = scheduling.CpuLatencyRequest()
-        self._cpu_latency_refused = False
+        self._scheduling = scheduling.ThreadScheduling(self._logger, 'physics thread')
         now = self.clock.monotonic()
         self._pacer = Pacer(settings.real_time_factor, engine.time, now)
         self._stamps = StampClock(0.0 if settings.publishes_clock else self.clock.epoch())
@@ -419,7 +416,7 @@ class RealTimeLoop:
             self._logger.fatal(self.failure + '\n' + traceback.format_exc())
             self.report(force=True)
         finally:
-            self._cpu_latency.release()
+            self._scheduling.release()
 
     def cycle(self) -> bool:
         """One pass: commands, a tick, its publications on time, status, idle to the next.
@@ -522,48 +519,17 @@ class RealTimeLoop:
                 clock.wait(event, left)
         return False
 
-    # ----------------------------------------------------------------- scheduling
     def _schedule(self) -> bool:
-        """Run this thread at ``realtime_priority`` while paced.
+        """Run at ``realtime_priority`` and hold ``cpu_dma_latency`` while paced.
 
-        As fast as possible there is nothing to be on time for, and a real-time thread
-        that never sleeps would starve ordinary ones; so it then runs as ordinary.
-        Returns whether anything was changed (or tried and refused).
-        """
-        changed = self._hold_cpu_latency()
-        want = self.settings.realtime_priority if self._pacer.paced else 0
-        if want == self._priority or want == self._priority_refused:
-            return changed
-        if scheduling.run_current_thread_at(want, self._logger, 'physics thread'):
-            self._priority = want
-        else:
-            self._priority_refused = want
-        return True
-
-    def _hold_cpu_latency(self) -> bool:
-        """Hold the ``cpu_dma_latency`` request while paced; release it otherwise.
+        As fast as possible there is nothing to be on time for (and a real-time thread
+        that never sleeps would starve ordinary ones), so then neither.
 
         Returns whether anything was changed (or tried and refused).
         """
-        want = self.settings.cpu_dma_latency if self._pacer.paced else -1
-        held = self._cpu_latency.microseconds
-        if want < 0:
-            if held is None:
-                return False
-            self._cpu_latency.release()
-            self._logger.info('cpu_dma_latency: released (not paced)')
-            return True
-        if want == held or self._cpu_latency_refused:
-            return False
-        problem = self._cpu_latency.hold(want)
-        if problem:
-            self._cpu_latency_refused = True
-            self._logger.warning(f'cpu_dma_latency: {problem}; idle CPUs may wake '
-                                 'late (set cpu_dma_latency:=-1 to not ask)')
-        else:
-            self._logger.info(f'cpu_dma_latency: idle CPUs wake within {want} us '
-                              'while paced')
-        return True
+        s, paced = self.settings, self._pacer.paced
+        return self._scheduling.update(s.realtime_priority if paced else 0,
+                                       s.cpu_dma_latency if paced else -1)
 
     # ----------------------------------------------------------------- status
     def report(self, force: bool = False) -> None:
