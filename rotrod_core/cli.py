@@ -33,16 +33,13 @@ from rotrod_core.command.profiles import (
     profile_from_options,
 )
 from rotrod_core.model.equations import COUPLINGS
-from rotrod_core.model.params import DEFAULT_HUB_RADIUS, RodParams
+from rotrod_core.model.params import DEFAULT_HUB_RADIUS, FIELDS, RodParams
 from rotrod_core.offline.simulate import simulate
 
-PARAM_FIELDS = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'eccentricity',
-                'hub_inertia', 'damping_ratio', 'section_width', 'section_thickness',
-                'gravity', 'rod_density')
-UNITS = {'mass': 'kg', 'rod_length': 'm', 'rod_diameter': 'm', 'youngs_modulus': 'Pa',
-         'eccentricity': 'm', 'hub_inertia': 'kg m^2', 'damping_ratio': '-',
-         'section_width': 'm', 'section_thickness': 'm', 'gravity': 'm/s^2',
-         'rod_density': 'kg/m^3'}
+NUMBER_FIELDS = tuple(f for f in FIELDS if not f.choices)
+"""The RodParams fields given as numbers (all but the section's choice)."""
+PARAM_FIELDS = tuple(f.name for f in NUMBER_FIELDS)
+UNITS = {f.name: f.unit for f in NUMBER_FIELDS}
 
 
 def _finite(text: str) -> float:
@@ -57,12 +54,17 @@ def _finite(text: str) -> float:
 
 def _add_params(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group('system parameters (SI units; defaults: the paper, Table 1)')
-    for name in PARAM_FIELDS:
-        g.add_argument('--' + name.replace('_', '-'), type=_finite, default=None,
-                       metavar=UNITS[name].upper().replace(' ', ''),
-                       help=f'{name.replace("_", " ")} [{UNITS[name]}]')
-    g.add_argument('--section', choices=('circular', 'rectangular'), default=None,
-                   help='rod cross-section (rectangular needs --section-width/-thickness)')
+    for f in FIELDS:
+        flag = '--' + f.name.replace('_', '-')
+        if f.choices:
+            g.add_argument(flag, choices=f.choices, default=None, help=f'{f.description} '
+                           '(rectangular needs --section-width/-thickness)')
+            continue
+        default = 'unused' if f.default is None else f'{f.default:g}'
+        g.add_argument(flag, type=_finite, default=None,
+                       metavar=f.unit.upper().replace(' ', '') if f.unit != '1' else 'RATIO',
+                       help=f'{f.description} [{f.unit}] (default {default})'
+                       .replace('%', '%%'))
 
 
 def _params(args) -> RodParams:

@@ -12,6 +12,18 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.utilities import remove_ros_args
 
 
+def make_executor(name: str, logger, context=None):
+    """The rclpy executor named ``name``: 'single_threaded' or 'events' (a warning)."""
+    if name == 'events':
+        from rclpy.experimental import EventsExecutor
+        logger.warning(
+            'executor=events: the experimental EventsExecutor busy-waits on a full core and '
+            'does not stop on SIGINT here (bench/bench_realtime.py); single_threaded is '
+            'the measured better choice')
+        return EventsExecutor(context=context)
+    return SingleThreadedExecutor(context=context)
+
+
 class ConfigurationError(ValueError):
     """A node's parameters are invalid: it exits with status 2 and the reason."""
 

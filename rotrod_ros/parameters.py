@@ -1,75 +1,70 @@
-"""The simulator node's ROS parameters: declarations, and conversion to core objects.
+"""The simulator node's ROS parameters, and their conversion to core objects.
 
-Each parameter is declared with a description that states its unit, a range where
-one applies, and whether it can change at run time. Values are validated as a whole
-(:func:`build_settings`): the physics through :class:`rotrod_core.live.engine.EngineConfig`,
-the node's own rates here, so a combination that makes no sense is refused with a
-reason and nothing changes.
+Declared through the package's one mechanism (:mod:`rotrod_ros.parameter_specs`):
+each with a description, its unit, a range or choices, and read-only where it cannot
+change at run time. The rod's (:data:`ROD_SPECS`, also the rig monitor's) are made
+from :data:`rotrod_core.model.params.FIELDS`, where the rod's units, descriptions and
+ranges are defined once. Values are validated as a whole (:func:`build_settings`):
+the physics through :class:`rotrod_core.live.engine.EngineConfig`, the node's own
+rates here, so a combination that makes no sense is refused with a reason and
+nothing changes.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
-from typing import Any
-
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
-from rotrod_core.live.scheduling import MAX_CPU_LATENCY
+from rotrod_core.live.loop import LoopSettings
+from rotrod_core.live.scheduling import MAX_CPU_LATENCY, MAX_PRIORITY
 from rotrod_core.model.equations import COUPLINGS, STATE_FIELDS
-from rotrod_core.model.params import SECTIONS, RodParams
+from rotrod_core.model.params import FIELDS, FieldInfo, RodParams
+
+from .parameter_specs import Spec, check_value, descriptor
+
+__all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'ROD_SPECS',
+           'SPECS_BY_NAME', 'Spec', 'build_settings', 'check_value', 'defaults',
+           'descriptor', 'rod_params']
 
 EXECUTORS = ('single_threaded', 'events')
 MIN_ESTIMATE_SAMPLES = 20
 """Fewest publications an estimate window may hold."""
 
 
+def rod_spec(info: FieldInfo) -> Spec:
+    """The parameter of a RodParams field: its unit, description and range.
+
+    A field unused by default (a rectangular section's sizes) is 0 when unused.
+    """
+    text = info.description + (' (> 0)' if info.sign == 'positive' else '')
+    if info.default is None:
+        text += f'; 0 = unused (not {info.section})'
+    default = 0.0 if info.default is None else info.default
+    return Spec(info.name, default, text, info.unit, info.low, info.high,
+                choices=info.choices)
+
+
+ROD_SPECS = tuple(rod_spec(info) for info in FIELDS)
+_OPTIONAL_ROD_FIELDS = tuple(info.name for info in FIELDS if info.default is None)
+
+
 @dataclass(frozen=True)
-class Spec:
-    """One parameter: name, default, description (with unit), numeric range."""
+class NodeSettings(LoopSettings):
+    """Settings of the node (not of the physics): the loop's and its own; NODE_SPECS."""
 
-    name: str
-    default: Any
-    description: str
-    low: float | None = None
-    high: float | None = None
-    choices: tuple = ()
-    read_only: bool = False
-    integer: bool = False
+    marker_trail_length: int = 200
+    marker_deflection_scale: float = 20.0
+    disk_radius: float = 0.15
+    frame_prefix: str = ''
+    deflection_noise: float = 0.0
+    noise_seed: int = 0
+    estimate_window: float = 1.0
+    estimate_rate: float = 10.0
+    executor: str = 'single_threaded'
 
 
-_ROD = RodParams()
 _ENGINE = EngineConfig()
-
-ROD_SPECS = (
-    Spec('mass', _ROD.mass, 'tip mass m, kg (> 0)', 0.0, 1e4),
-    Spec('rod_length', _ROD.rod_length, 'rod length l, m (> 0)', 0.0, 100.0),
-    Spec('rod_diameter', _ROD.rod_diameter, 'rod diameter d of a circular section, m (> 0)',
-         0.0, 10.0),
-    Spec('youngs_modulus', _ROD.youngs_modulus, "Young's modulus E, Pa (> 0)", 0.0, 1e13),
-    Spec('eccentricity', _ROD.eccentricity,
-         'radius r0 of the rod root from the rotation axis, m', 0.0, 100.0),
-    Spec('hub_inertia', _ROD.hub_inertia,
-         'rotary inertia J of the hub (disk) about the axis, kg m^2 (> 0 for the exact '
-         'coupling)', 0.0, 1e9),
-    Spec('damping_ratio', _ROD.damping_ratio,
-         'modal damping ratio zeta of the bending (rotating damping), 1', 0.0, 10.0),
-    Spec('section', _ROD.section, 'rod cross-section: circular | rectangular',
-         choices=SECTIONS),
-    Spec('section_width', 0.0,
-         'rectangular section size b along e1 (radial), m; 0 = unused (circular)', 0.0, 10.0),
-    Spec('section_thickness', 0.0,
-         'rectangular section size h along e2 (tangential), m; 0 = unused (circular)',
-         0.0, 10.0),
-    Spec('gravity', _ROD.gravity,
-         'gravity along the rod, m/s^2: > 0 the rod stands up with the mass on top (its '
-         'weight compresses and softens it), < 0 it hangs (tension stiffens it), 0 = the '
-         'paper; compression at or past buckling is refused', -1e3, 1e3),
-    Spec('rod_density', _ROD.rod_density,
-         "density of the rod's material, kg/m^3 (one-mode Rayleigh-Ritz: modal mass "
-         'm + 33/140 rho A l); 0 = massless, the paper', 0.0, 1e5),
-)
+_NODE = NodeSettings()
 
 ENGINE_SPECS = (
     Spec('drive', _ENGINE.drive,
@@ -79,167 +74,106 @@ ENGINE_SPECS = (
          'hub torque equation: exact (Lagrangian, conserves angular momentum) | paper '
          '(Eq. 23 + J w\')', choices=COUPLINGS),
     Spec('physics_rate', _ENGINE.physics_rate,
-         'fixed integration rate, Hz (step 1/physics_rate)', 1.0, 1e6),
+         'fixed integration rate (step 1/physics_rate)', 'Hz', 1.0, 1e6),
     Spec('max_angular_acceleration', _ENGINE.max_angular_acceleration,
-         "bound on |w'| when following cmd/omega, rad/s^2 (> 0; bends the rod back by "
-         "w' r0 m/k2)", 0.0, 1e6),
+         "bound on |w'| when following cmd/omega (> 0; bends the rod back by "
+         "w' r0 m/k2)", 'rad/s^2', 0.0, 1e6),
     Spec('max_omega', _ENGINE.max_omega,
          'largest |w| accepted on cmd/omega, and reached in torque drive before the '
-         'simulation halts, rad/s (> 0)', 0.0, 1e6),
-    Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque, N m (> 0)',
-         0.0, 1e9),
+         'simulation halts (> 0)', 'rad/s', 0.0, 1e6),
+    Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque (> 0)',
+         'N m', 0.0, 1e9),
     Spec('deflection_limit', _ENGINE.deflection_limit,
-         'the critical deflection (the paper\'s 3 mm criterion), m (> 0): while the tip '
+         'the critical deflection (the paper\'s 3 mm criterion, > 0): while the tip '
          'deflection sqrt(u^2 + v^2) is beyond it, diagnostics are ERROR ("beyond the '
          'critical deflection", with the first crossing and the peak); the simulation '
-         'goes on and accepts commands', 0.0, 100.0),
+         'goes on and accepts commands', 'm', 0.0, 100.0),
     Spec('warn_fraction', _ENGINE.warn_fraction,
-         'fraction of deflection_limit above which diagnostics WARN, 1', 0.0, 1.0),
+         'fraction of deflection_limit above which diagnostics WARN', '1', 0.0, 1.0),
     Spec('max_deflection_ratio', _ENGINE.max_deflection_ratio,
-         'model-validity bound on the tip deflection over the rod length, |r| / l, 1: '
+         'model-validity bound on the tip deflection over the rod length, |r| / l: '
          'beyond it the small-deflection model means nothing (its foreshortening '
          '0.6 (|r|/l)^2 is 0.6 % at 0.1) and the simulation halts at the last good state '
-         'until ~/reset; 0 = no bound', 0.0, 1.0),
+         'until ~/reset; 0 = no bound', '1', 0.0, 1.0),
     Spec('critical_margin', _ENGINE.critical_margin,
-         'relative distance to a critical speed within which diagnostics WARN, 1', 0.0, 1.0),
+         'relative distance to a critical speed within which diagnostics WARN', '1',
+         0.0, 1.0),
     Spec('setpoint_delay', _ENGINE.setpoint_delay,
-         'lag of w behind the cmd/omega stream, s (at least two stream intervals); '
+         'lag of w behind the cmd/omega stream (at least two stream intervals); '
          'absorbs delivery jitter up to the lag minus one interval (raise it at a high '
-         'real_time_factor)', 0.0, 10.0),
+         'real_time_factor)', 's', 0.0, 10.0),
     Spec('command_timeout', _ENGINE.command_timeout,
          'simulated seconds without an accepted command on the active drive\'s topic '
          'after which the hub is stopped: velocity drive ramps w to 0 at '
          'max_angular_acceleration, torque drive sets the torque to 0 (coast); '
          'diagnostics WARN until a command comes. 0 = off (w holds the last setpoint, '
-         'the torque stays); else >= 2 x setpoint_delay, s', 0.0, 86400.0),
-    *(Spec(f'initial.{name}', 0.0,
-           f'initial {name} ({unit}) at start and after ~/reset')
-      for name, unit in zip(STATE_FIELDS, ('m', 'm', 'm/s', 'm/s', 'rad', 'rad/s'))),
+         'the torque stays); else >= 2 x setpoint_delay', 's', 0.0, 86400.0),
+    *(Spec(f'initial.{name}', 0.0, f'initial {name} at start and after ~/reset', unit,
+           -bound, bound)
+      for name, unit, bound in zip(STATE_FIELDS, ('m', 'm', 'm/s', 'm/s', 'rad', 'rad/s'),
+                                   (100.0, 100.0, 1e6, 1e6, 1e9, 1e6))),
 )
 
 NODE_SPECS = (
-    Spec('publish_rate', 100.0,
-         'rate of joint_states, tip/*, frequencies (and /clock), Hz of simulated time '
-         '(<= physics_rate)', 0.1, 1e4),
-    Spec('real_time_factor', 1.0,
+    Spec('publish_rate', _NODE.publish_rate,
+         'rate of joint_states, tip/*, frequencies (and /clock), of simulated time '
+         '(<= physics_rate)', 'Hz', 0.1, 1e4),
+    Spec('real_time_factor', _NODE.real_time_factor,
          'simulated seconds per wall second; 0 = as fast as possible. /clock is published '
-         'whenever it is not 1', 0.0, 1e4),
-    Spec('markers', True, 'publish markers (visualization_msgs/MarkerArray) for RViz'),
-    Spec('marker_rate', 20.0, 'rate of markers, Hz of simulated time, and at most twice '
-         'that in wall time (faster than real time)', 0.1, 1e3),
-    Spec('marker_trail_length', 200, 'points kept in the tip trail marker', 0, 100000,
-         integer=True),
-    Spec('marker_deflection_scale', 20.0,
+         'whenever it is not 1', '1', 0.0, 1e4),
+    Spec('markers', _NODE.markers, 'publish markers (visualization_msgs/MarkerArray) for '
+         'RViz'),
+    Spec('marker_rate', _NODE.marker_rate, 'rate of markers, of simulated time, and at most '
+         'twice that in wall time (faster than real time)', 'Hz', 0.1, 1e3),
+    Spec('marker_trail_length', _NODE.marker_trail_length,
+         'points kept in the tip trail marker', '', 0, 100000),
+    Spec('marker_deflection_scale', _NODE.marker_deflection_scale,
          'drawn deflection / true deflection in the markers (millimetres are invisible '
-         'at true size), 1', 1.0, 1e5),
-    Spec('disk_radius', 0.15, 'radius of the hub disk as drawn, m', 0.0, 100.0),
-    Spec('frame_prefix', '', 'prefix of the frame ids world and rotor (e.g. "rod1/")',
-         read_only=True),
-    Spec('diagnostics_rate', 1.0, 'rate of /diagnostics (also sent on a change of level), '
-         'Hz of wall time', 0.01, 100.0),
-    Spec('deflection_noise', 0.0,
+         'at true size)', '1', 1.0, 1e5),
+    Spec('disk_radius', _NODE.disk_radius, 'radius of the hub disk as drawn', 'm',
+         0.0, 100.0),
+    Spec('frame_prefix', _NODE.frame_prefix, 'prefix of the frame ids world and rotor '
+         '(e.g. "rod1/")', read_only=True),
+    Spec('diagnostics_rate', _NODE.diagnostics_rate, 'rate of /diagnostics (also sent on a '
+         'change of level), of wall time', 'Hz', 0.01, 100.0),
+    Spec('deflection_noise', _NODE.deflection_noise,
          'standard deviation of Gaussian noise added to the published tip/deflection '
-         '(u and v each; a sensor), m; never to the state; 0 = none', 0.0, 1.0),
-    Spec('noise_seed', 0, 'seed of the deflection noise: the same seed, the same noise '
-         '(a reproducible run)', 0, 2**31 - 1, integer=True),
-    Spec('estimate_window', 1.0,
+         '(u and v each; a sensor); never to the state; 0 = none', 'm', 0.0, 1.0),
+    Spec('noise_seed', _NODE.noise_seed, 'seed of the deflection noise: the same seed, the '
+         'same noise (a reproducible run)', '', 0, 2**31 - 1),
+    Spec('estimate_window', _NODE.estimate_window,
          'window of the whirl-frequency estimate from the published tip motion '
-         '(frequencies/estimate), s of simulated time; 0 = no estimate', 0.0, 60.0),
-    Spec('estimate_rate', 10.0,
-         'rate of frequencies/estimate, Hz of simulated time (<= publish_rate)', 0.01, 1e3),
-    Spec('executor', 'single_threaded',
+         '(frequencies/estimate), of simulated time; 0 = no estimate', 's', 0.0, 60.0),
+    Spec('estimate_rate', _NODE.estimate_rate,
+         'rate of frequencies/estimate, of simulated time (<= publish_rate)', 'Hz',
+         0.01, 1e3),
+    Spec('executor', _NODE.executor,
          'rclpy executor for commands, services and parameters: single_threaded | events '
          '(rclpy\'s experimental EventsExecutor: measured worse, see '
          'bench/bench_realtime.py); physics runs in its own thread',
          choices=EXECUTORS, read_only=True),
-    Spec('realtime_priority', 50,
+    Spec('realtime_priority', _NODE.realtime_priority,
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
-         'warning otherwise', 0, 99, integer=True, read_only=True),
-    Spec('cpu_dma_latency', -1,
+         'warning otherwise', '', 0, MAX_PRIORITY, read_only=True),
+    Spec('cpu_dma_latency', _NODE.cpu_dma_latency,
          'machine-wide, opt-in (config/realtime.yaml): while paced (real_time_factor > 0), '
          'the CPU wake-up latency the node asks the kernel for (PM QoS, '
-         '/dev/cpu_dma_latency, as cyclictest does), us: every idle CPU of the machine '
+         '/dev/cpu_dma_latency, as cyclictest does): every idle CPU of the machine '
          'stays out of sleep states slower to leave. 0 keeps them polling (a sleeping '
          'thread wakes at once; idle cores stay busy, costing power); -1 (default) = '
          'leave the machine as it is. Needs root; refused with a warning otherwise',
-         -1, MAX_CPU_LATENCY, integer=True, read_only=True),
+         'us', -1, MAX_CPU_LATENCY, read_only=True),
 )
 
 ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
 SPECS_BY_NAME = {s.name: s for s in ALL_SPECS}
 
 
-@dataclass(frozen=True)
-class NodeSettings:
-    """Settings of the node itself (not of the physics); see NODE_SPECS."""
-
-    publish_rate: float = 100.0
-    real_time_factor: float = 1.0
-    markers: bool = True
-    marker_rate: float = 20.0
-    marker_trail_length: int = 200
-    marker_deflection_scale: float = 20.0
-    disk_radius: float = 0.15
-    frame_prefix: str = ''
-    diagnostics_rate: float = 1.0
-    deflection_noise: float = 0.0
-    noise_seed: int = 0
-    estimate_window: float = 1.0
-    estimate_rate: float = 10.0
-    executor: str = 'single_threaded'
-    realtime_priority: int = 50
-    cpu_dma_latency: int = -1
-
-    @property
-    def publish_period(self) -> float:
-        """Simulated time between publications, s."""
-        return 1.0 / self.publish_rate
-
-    @property
-    def publishes_clock(self) -> bool:
-        """Whether /clock is published (real_time_factor != 1)."""
-        return self.real_time_factor != 1.0
-
-
-def descriptor(spec: Spec) -> ParameterDescriptor:
-    """The ROS parameter descriptor of ``spec``: description, range or choices."""
-    d = ParameterDescriptor(name=spec.name, description=spec.description,
-                            read_only=spec.read_only)
-    if spec.choices:
-        d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    elif spec.low is not None and spec.integer:
-        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
-                                        step=0)]
-    elif spec.low is not None:
-        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
-                                                     to_value=float(spec.high), step=0.0)]
-    return d
-
-
-def check_value(spec: Spec, value: Any) -> None:
-    """Raise ValueError if ``value`` is not allowed for ``spec`` (type, range, choices)."""
-    if spec.choices:
-        if value not in spec.choices:
-            raise ValueError(f'{spec.name} must be one of {spec.choices}, got {value!r}')
-        return
-    if isinstance(spec.default, bool) or isinstance(spec.default, str):
-        if type(value) is not type(spec.default):
-            raise ValueError(f'{spec.name} must be a {type(spec.default).__name__}, '
-                             f'got {value!r}')
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f'{spec.name} must be a number, got {value!r}')
-    if not math.isfinite(value):
-        raise ValueError(f'{spec.name} must be finite, got {value!r}')
-    if spec.low is not None and not spec.low <= value <= spec.high:
-        raise ValueError(f'{spec.name} must be in [{spec.low:g}, {spec.high:g}], got {value!r}')
-
-
 def rod_params(values: dict) -> RodParams:
-    """The RodParams of the ROD_SPECS values (section sizes 0 = unused); ValueError."""
+    """The RodParams of the ROD_SPECS values (unused section sizes are 0); ValueError."""
     rod = {s.name: values[s.name] for s in ROD_SPECS}
-    for name in ('section_width', 'section_thickness'):
+    for name in _OPTIONAL_ROD_FIELDS:
         if rod[name] == 0.0:
             rod[name] = None
     return RodParams(**rod)

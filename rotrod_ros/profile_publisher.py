@@ -1,7 +1,8 @@
 """rotrod profile publisher: streams an angular-velocity profile on cmd/omega.
 
-Node ``rotrod_profile_publisher``. Publishes std_msgs/Float64 (rad/s) on ``cmd/omega``
-(relative: follows the namespace) at ``rate`` Hz of the node clock, so under
+Node ``rotrod_profile_publisher``: the topic below (INTERFACES), parameters after it,
+all set at start; docs/nodes.md lists the same. Publishes std_msgs/Float64 (rad/s) on
+``cmd/omega`` (relative: follows the namespace) at ``rate`` Hz of the node clock, so under
 ``use_sim_time`` it follows /clock. Sample k carries w(k / rate) of the profile: the
 stream is the profile sampled on a regular grid, whatever the timer's jitter.
 
@@ -24,8 +25,6 @@ import sys
 import time
 
 import rclpy
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
@@ -37,8 +36,9 @@ from rotrod_core.command.profiles import (
     profile_from_options,
 )
 
-from . import node_main
+from . import interfaces, node_main, parameter_specs
 from .node_main import ConfigurationError
+from .parameter_specs import Spec
 
 NODE_NAME = 'rotrod_profile_publisher'
 QOS_DEPTH = 1000
@@ -53,19 +53,26 @@ loopback: such a start burst in 3 of 12 streams started on the match (up to 90 m
 0.4 s in a demo run under load), 1 of 14 with 0.3 s of settling (40 ms). The simulator
 copes with a burst (OmegaSetpointShaper), but a burst is a profile delivered late."""
 
-# name, default, description (unit), (low, high) or None
 PARAMETERS = (
-    ('profile', 'eq26', ' | '.join(OPTION_PROFILES), None),
-    *((o.name, o.default, f'{o.description}' + (f', {o.unit}' if o.unit else ''),
-       None if o.low is None else (o.low, o.high)) for o in PROFILE_OPTIONS),
-    ('rate', 100.0, 'publishing rate, Hz of the node clock', (0.0, 1e5)),
-    ('duration', 0.0, 'how long to stream, s of the node clock; 0 = to the profile\'s end',
-     (0.0, 1e9)),
-    ('loop', False, 'start the profile over at the end', None),
-    ('hold', False, 'after the end, keep publishing the last value until stopped', None),
-    ('realtime_priority', 50, 'SCHED_FIFO priority of the node\'s thread, so the stream '
-     'stays punctual on a busy machine, 1..99; 0 = ordinary scheduling. Needs root or '
-     'CAP_SYS_NICE; refused with a warning otherwise', (0, scheduling.MAX_PRIORITY)),
+    Spec('profile', 'eq26', 'the profile to stream', choices=OPTION_PROFILES),
+    *(Spec(o.name, o.default, o.description, o.unit, o.low, o.high)
+      for o in PROFILE_OPTIONS),
+    Spec('rate', 100.0, 'publishing rate, of the node clock (> 0)', 'Hz', 0.0, 1e5),
+    Spec('duration', 0.0, 'how long to stream, of the node clock; 0 = to the profile\'s '
+         'end', 's', 0.0, 1e9),
+    Spec('loop', False, 'start the profile over at the end'),
+    Spec('hold', False, 'after the end, keep publishing the last value until stopped'),
+    Spec('realtime_priority', 50, 'SCHED_FIFO priority of the node\'s thread, so the '
+         'stream stays punctual on a busy machine, 1..99; 0 = ordinary scheduling. Needs '
+         'root or CAP_SYS_NICE; refused with a warning otherwise', '', 0,
+         scheduling.MAX_PRIORITY),
+)
+READ_ONLY = True
+"""The publisher's parameters are set at start only."""
+
+INTERFACES = (
+    interfaces.pub('cmd/omega', Float64, 'the profile\'s angular velocity, rad/s: sample k '
+                   'is w(k / rate); reliable, none skipped', QOS_DEPTH),
 )
 
 
@@ -79,19 +86,7 @@ class ProfilePublisher(Node):
 
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
-        values = {}
-        for name, default, description, bounds in PARAMETERS:
-            d = ParameterDescriptor(description=description, read_only=True)
-            if bounds and isinstance(default, int):
-                d.integer_range = [IntegerRange(from_value=bounds[0], to_value=bounds[1],
-                                                step=0)]
-            elif bounds:
-                d.floating_point_range = [FloatingPointRange(from_value=bounds[0],
-                                                             to_value=bounds[1], step=0.0)]
-            try:
-                values[name] = self.declare_parameter(name, default, d).value
-            except ParameterException as exc:
-                raise ConfigurationError(f'parameter {name}: {exc}') from None
+        values = parameter_specs.declare(self, PARAMETERS, read_only=READ_ONLY)
         try:
             self.profile = make_profile(values)
         except ValueError as exc:
@@ -109,7 +104,7 @@ class ProfilePublisher(Node):
         self.published = 0
         self._waiting_logged = False
         self._matched_at: float | None = None
-        self._pub = self.create_publisher(Float64, 'cmd/omega', QOS_DEPTH)
+        self._pub = interfaces.create(self, INTERFACES)['cmd/omega']
         self._timer = self.create_timer(1.0 / self.rate, self._on_timer)
 
     @property
@@ -170,8 +165,9 @@ class ProfilePublisher(Node):
 def _parser() -> argparse.ArgumentParser:
     return argparse.ArgumentParser(
         prog='profile_publisher', description=__doc__.split('\n')[0],
-        epilog=__doc__.split('\n', 2)[2] + '\nParameters:\n' + '\n'.join(
-            f'  {n}: {d} [default {v!r}]' for n, v, d, _ in PARAMETERS),
+        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
+                          'Parameters:',
+                          *parameter_specs.help_lines(PARAMETERS, READ_ONLY)]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
 
 

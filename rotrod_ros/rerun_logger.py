@@ -1,9 +1,9 @@
 """rotrod Rerun logger: records the simulator's topics to a Rerun file, headlessly.
 
-Node ``rotrod_rerun_logger``. Subscribes (relative names) to joint_states,
-tip/deflection, tip/position, frequencies and frequencies/estimate, and writes
-``output`` (a .rrd file) with time on the message stamps and a default blueprint,
-so the file opens as a dashboard: ``rerun rotrod.rrd``. With ``serve:=true`` it also
+Node ``rotrod_rerun_logger``: topics below (INTERFACES), parameters after them, all
+set at start; docs/nodes.md lists the same. It writes ``output`` (a .rrd file) with
+time on the message stamps and a default blueprint, so the file opens as a dashboard:
+``rerun rotrod.rrd``. With ``serve:=true`` it also
 serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``). With
 ``record_from:=motion`` it keeps only the last ``pretrigger`` seconds until the hub's
 angular velocity first changes: the file begins just before the motion, not when the
@@ -24,7 +24,6 @@ import argparse
 import sys
 
 from geometry_msgs.msg import PointStamped, Vector3Stamped
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -32,27 +31,44 @@ from std_msgs.msg import Float64MultiArray
 
 from rotrod_core.reporting.recording import RecordingWriter
 
-from . import node_main
+from . import interfaces, node_main, parameter_specs
 from .messages import to_seconds
 from .node_main import ConfigurationError
+from .parameter_specs import Spec
 
 NODE_NAME = 'rotrod_rerun_logger'
 QOS_DEPTH = 1000
 """Subscription queue depth: a burst of publications is not dropped."""
 
-PARAMETERS = (
-    ('output', 'rotrod.rrd', 'path of the Rerun recording to write'),
-    ('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
-    ('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)'),
-    ('flush_period', 0.25, 'seconds of wall time between writes of the buffered data'),
-    ('record_from', 'start', 'start: record from the first message; motion: keep only '
-     'the last pretrigger seconds until the hub\'s angular velocity first differs from '
-     'the first one received, then record everything (the file begins just before the '
-     'motion, not when the logger started)'),
-    ('pretrigger', 0.5, 'with record_from motion: seconds of stamp time kept from before '
-     'the hub first moved (>= 0)'),
-)
 RECORD_FROM = ('start', 'motion')
+PARAMETERS = (
+    Spec('output', 'rotrod.rrd', 'path of the Rerun recording to write'),
+    Spec('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
+    Spec('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)', '', 1, 65535),
+    Spec('flush_period', 0.25, 'wall time between writes of the buffered data (> 0)', 's',
+         0.0, 60.0),
+    Spec('record_from', 'start', 'start: record from the first message; motion: keep only '
+         'the last pretrigger seconds until the hub\'s angular velocity first differs from '
+         'the first one received, then record everything (the file begins just before the '
+         'motion, not when the logger started)', choices=RECORD_FROM),
+    Spec('pretrigger', 0.5, 'with record_from motion: stamp time kept from before the hub '
+         'first moved', 's', 0.0, 86400.0),
+)
+READ_ONLY = True
+"""The logger's parameters are set at start only."""
+
+INTERFACES = (   # in the order a simulator's tick publishes them (see _drain)
+    interfaces.sub('joint_states', JointState, "joint 'hub': w rad/s and the hub torque "
+                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH),
+    interfaces.sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame',
+                   QOS_DEPTH),
+    interfaces.sub('tip/position', PointStamped, 'the mass in the inertial frame, m',
+                   QOS_DEPTH),
+    interfaces.sub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w',
+                   QOS_DEPTH),
+    interfaces.sub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from '
+                   'the motion', QOS_DEPTH),
+)
 
 
 class RerunLogger(Node):
@@ -60,19 +76,12 @@ class RerunLogger(Node):
 
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
-        values = {name: self.declare_parameter(
-            name, default, ParameterDescriptor(description=text, read_only=True)).value
-            for name, default, text in PARAMETERS}
+        values = parameter_specs.declare(self, PARAMETERS, read_only=READ_ONLY)
         if not values['output']:
             raise ConfigurationError('output must name a file')
-        if not 0 < values['flush_period'] <= 60:
+        if not values['flush_period'] > 0:
             raise ConfigurationError(f'flush_period must be in (0, 60] s, got '
                                      f'{values["flush_period"]!r}')
-        if not 0 < values['serve_port'] < 65536:
-            raise ConfigurationError(f'serve_port must be a TCP port, got {values["serve_port"]}')
-        if values['record_from'] not in RECORD_FROM:
-            raise ConfigurationError(f'record_from must be one of {RECORD_FROM}, got '
-                                     f'{values["record_from"]!r}')
         on_motion = values['record_from'] == 'motion'
         try:
             self.writer = RecordingWriter(values['output'],
@@ -86,17 +95,12 @@ class RerunLogger(Node):
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
         self._omega_at_rest = 0.0
-        self._topics = [   # in the order a tick publishes them (see _drain)
-            self.create_subscription(JointState, 'joint_states', self._on_joint, QOS_DEPTH),
-            self.create_subscription(Vector3Stamped, 'tip/deflection', self._on_deflection,
-                                     QOS_DEPTH),
-            self.create_subscription(PointStamped, 'tip/position', self._on_position,
-                                     QOS_DEPTH),
-            self.create_subscription(Float64MultiArray, 'frequencies',
-                                     lambda m: self._on_frequencies(m, False), QOS_DEPTH),
-            self.create_subscription(Float64MultiArray, 'frequencies/estimate',
-                                     lambda m: self._on_frequencies(m, True), QOS_DEPTH),
-        ]
+        io = interfaces.create(self, INTERFACES, {
+            'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
+            'tip/position': self._on_position,
+            'frequencies': lambda m: self._on_frequencies(m, False),
+            'frequencies/estimate': lambda m: self._on_frequencies(m, True)})
+        self._topics = [io[i.name] for i in INTERFACES]     # in a tick's order
         self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
@@ -176,8 +180,9 @@ class RerunLogger(Node):
 def _parser() -> argparse.ArgumentParser:
     return argparse.ArgumentParser(
         prog='rerun_logger', description=__doc__.split('\n')[0],
-        epilog=__doc__.split('\n', 2)[2] + '\nParameters:\n' + '\n'.join(
-            f'  {n}: {d} [default {v!r}]' for n, v, d in PARAMETERS),
+        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
+                          'Parameters:',
+                          *parameter_specs.help_lines(PARAMETERS, READ_ONLY)]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
 
 

@@ -151,3 +151,59 @@ def cpu_latency_limit(device: str = CPU_DMA_LATENCY) -> int | None:
     finally:
         os.close(fd)
     return struct.unpack('=i', data)[0] if len(data) == 4 else None
+
+
+class ThreadScheduling:
+    """The calling thread's SCHED_FIFO priority and a CPU latency request, kept as asked.
+
+    :meth:`update` is called from the thread itself whenever the wanted settings may
+    have changed; it changes only what differs, logs each change, and does not ask
+    again for what the system refused.
+    """
+
+    def __init__(self, logger, what: str, device: str = CPU_DMA_LATENCY):
+        self._logger = logger
+        self._what = what
+        self.priority = 0
+        """The thread's SCHED_FIFO priority (0: ordinary)."""
+        self._priority_refused: int | None = None
+        self._latency = CpuLatencyRequest(device)
+        self._latency_refused = False
+
+    def update(self, priority: int, cpu_latency: int) -> bool:
+        """Run at ``priority`` (0: ordinary) and hold ``cpu_latency`` us (-1: none).
+
+        Returns whether anything was changed (or tried and refused).
+        """
+        changed = self._hold(cpu_latency)
+        if priority in (self.priority, self._priority_refused):
+            return changed
+        if run_current_thread_at(priority, self._logger, self._what):
+            self.priority = priority
+        else:
+            self._priority_refused = priority
+        return True
+
+    def _hold(self, want: int) -> bool:
+        held = self._latency.microseconds
+        if want < 0:
+            if held is None:
+                return False
+            self._latency.release()
+            self._logger.info('cpu_dma_latency: released (not paced)')
+            return True
+        if want == held or self._latency_refused:
+            return False
+        problem = self._latency.hold(want)
+        if problem:
+            self._latency_refused = True
+            self._logger.warning(f'cpu_dma_latency: {problem}; idle CPUs may wake '
+                                 'late (set cpu_dma_latency:=-1 to not ask)')
+        else:
+            self._logger.info(f'cpu_dma_latency: idle CPUs wake within {want} us '
+                              'while paced')
+        return True
+
+    def release(self) -> None:
+        """Drop the CPU latency request (the priority stays: the thread is ending)."""
+        self._latency.release()

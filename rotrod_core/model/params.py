@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -56,6 +56,46 @@ DEFAULT_HUB_INERTIA = disk_inertia(DEFAULT_HUB_RADIUS, DEFAULT_HUB_THICKNESS)
 """Default hub inertia: a steel disk 0.15 m in radius and 10 mm thick (~0.0624 kg m^2)."""
 
 SECTIONS = ('circular', 'rectangular')
+
+
+@dataclass(frozen=True)
+class FieldInfo:
+    """What a :class:`RodParams` field is: its unit, description and range, defined once.
+
+    The nodes' parameters and the CLI's options are made from it.
+
+    Attributes:
+        name: the field's name.
+        default: its default (None: unused unless ``section`` says otherwise).
+        unit: SI unit ('1' for a ratio, '' for a choice).
+        description: what it is, without the unit.
+        low, high: the range a front end offers (inclusive; None: no range). The
+            physical checks are :class:`RodParams`' own, e.g. ``sign``.
+        sign: 'positive' (> 0), 'nonnegative' (>= 0) or '' (any finite number),
+            checked by :class:`RodParams`.
+        section: the cross-section the field applies to ('' for any).
+        choices: the allowed values of a choice ('section').
+    """
+
+    name: str
+    default: Any
+    unit: str
+    description: str
+    low: float | None = None
+    high: float | None = None
+    sign: str = ''
+    section: str = ''
+    choices: tuple = ()
+
+
+_INFO = 'rotrod'
+"""Key of a RodParams field's metadata: the keyword arguments of its FieldInfo."""
+
+
+def _field(default, unit: str, description: str, low=None, high=None, **info):
+    """A RodParams field with its :class:`FieldInfo` in the metadata."""
+    return field(default=default, metadata={_INFO: dict(
+        unit=unit, description=description, low=low, high=high, **info)})
 
 
 def _check(name: str, value: Any, *, positive: bool = False, nonnegative: bool = False,
@@ -121,36 +161,47 @@ class RodParams:
             -(3/8) rho A g (a Rayleigh estimate with the unloaded shape).
     """
 
-    mass: Any = 0.3
-    rod_length: Any = 0.3
-    rod_diameter: Any = 0.003
-    youngs_modulus: Any = 100e9
-    eccentricity: Any = 0.1
-    hub_inertia: Any = DEFAULT_HUB_INERTIA
-    damping_ratio: Any = 0.0
-    section: str = 'circular'
-    section_width: Any = None
-    section_thickness: Any = None
-    gravity: Any = 0.0
-    rod_density: Any = 0.0
+    mass: Any = _field(0.3, 'kg', 'tip mass m', 0.0, 1e4, sign='positive')
+    rod_length: Any = _field(0.3, 'm', 'rod length l', 0.0, 100.0, sign='positive')
+    rod_diameter: Any = _field(0.003, 'm', 'rod diameter d of a circular section', 0.0, 10.0,
+                               sign='positive', section='circular')
+    youngs_modulus: Any = _field(100e9, 'Pa', "Young's modulus E", 0.0, 1e13, sign='positive')
+    eccentricity: Any = _field(0.1, 'm', 'radius r0 of the rod root from the rotation axis',
+                               0.0, 100.0, sign='nonnegative')
+    hub_inertia: Any = _field(DEFAULT_HUB_INERTIA, 'kg m^2',
+                              'rotary inertia J of the hub (disk) about the axis (> 0 for the '
+                              'exact coupling)', 0.0, 1e9, sign='nonnegative')
+    damping_ratio: Any = _field(0.0, '1', 'modal damping ratio zeta of the bending '
+                                '(rotating damping)', 0.0, 10.0, sign='nonnegative')
+    section: str = _field('circular', '', 'rod cross-section', choices=SECTIONS)
+    section_width: Any = _field(None, 'm', 'rectangular section size b along e1 (radial)',
+                                0.0, 10.0, sign='positive', section='rectangular')
+    section_thickness: Any = _field(None, 'm', 'rectangular section size h along e2 '
+                                    '(tangential)', 0.0, 10.0, sign='positive',
+                                    section='rectangular')
+    gravity: Any = _field(0.0, 'm/s^2', 'gravity along the rod: > 0 the rod stands up with '
+                          'the mass on top (its weight compresses and softens it), < 0 it '
+                          'hangs (tension stiffens it), 0 = the paper; compression at or past '
+                          'buckling is refused', -1e3, 1e3)
+    rod_density: Any = _field(0.0, 'kg/m^3', "density of the rod's material (one-mode "
+                              'Rayleigh-Ritz: modal mass m + 33/140 rho A l); 0 = massless, '
+                              'the paper', 0.0, 1e5, sign='nonnegative')
 
     def __post_init__(self):
         set_ = object.__setattr__
         if self.section not in SECTIONS:
             raise ValueError(f'RodParams.section must be one of {SECTIONS}, got {self.section!r}')
-        for name in ('mass', 'rod_length', 'youngs_modulus'):
-            set_(self, name, _check(name, getattr(self, name), positive=True))
-        for name in ('eccentricity', 'hub_inertia', 'damping_ratio', 'rod_density'):
-            set_(self, name, _check(name, getattr(self, name), nonnegative=True))
-        set_(self, 'gravity', _check('gravity', self.gravity))
-        if self.section == 'circular':
-            set_(self, 'rod_diameter', _check('rod_diameter', self.rod_diameter, positive=True))
-            for name in ('section_width', 'section_thickness'):
-                if getattr(self, name) is not None:
-                    raise ValueError(f"RodParams.{name} applies to section='rectangular' only")
-        else:
-            for name in ('section_width', 'section_thickness'):
-                set_(self, name, _check(name, getattr(self, name), positive=True))
+        for info in FIELDS:
+            if info.choices:
+                continue
+            value = getattr(self, info.name)
+            if info.section and info.section != self.section:
+                if info.default is None and value is not None:
+                    raise ValueError(f"RodParams.{info.name} applies to "
+                                     f"section='{info.section}' only")
+                continue
+            set_(self, info.name, _check(info.name, value, positive=info.sign == 'positive',
+                                         nonnegative=info.sign == 'nonnegative'))
         try:
             np.broadcast_shapes(*(np.shape(v) for v in self._numeric().values()))
         except ValueError:
@@ -479,3 +530,8 @@ class RodParams:
         for name, value in self._numeric().items():
             changes[name] = float(np.broadcast_to(value, shape)[index])
         return dataclasses.replace(self, **changes)
+
+
+FIELDS = tuple(FieldInfo(f.name, f.default, **f.metadata[_INFO])
+               for f in dataclasses.fields(RodParams))
+"""Every RodParams field's :class:`FieldInfo`, in the dataclass's order."""

@@ -1,0 +1,554 @@
+"""The simulator's real-time loop (no ROS import): pacing, commands, publication timing.
+
+Also the marker throttling, pause and reset.
+
+:class:`RealTimeLoop` drives a :class:`~rotrod_core.live.engine.SimulationEngine` from
+a thread of its own at a fixed step. Each tick integrates in whole steps up to the
+simulated time due now (``real_time_factor`` x wall time; 0 = as fast as possible), so
+simulated time does not drift from the clock; it computes the publications a little
+ahead (:data:`LEAD`) and hands each to the ``publish`` callback at its due time.
+Commands from any source go through one queue (:meth:`RealTimeLoop.submit`, any
+thread, O(1)) with their arrival time; the loop's thread applies them between ticks at
+the simulated instant they arrived, so a flood of commands cannot hold the physics
+off. The thread runs under SCHED_FIFO at ``realtime_priority`` where permitted, and
+holds a CPU wake-up latency request of ``cpu_dma_latency`` us while paced
+(:mod:`rotrod_core.live.scheduling`).
+
+Time comes from a clock object (:class:`SystemClock`; a test passes a fake one, whose
+waits move its time, to run the loop deterministically with :meth:`RealTimeLoop.cycle`).
+Messages are the host's business: the loop calls ``publish(sample, settings, config,
+snapshot)`` and ``publish_status(status)`` with plain values (SI units, stamps in s).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+import traceback
+from collections import deque
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import rotrod_core.live.scheduling as scheduling
+from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.live.pacing import Pacer, StampClock
+from rotrod_core.model.equations import State
+from rotrod_core.numerics.checks import finite_number
+
+MAX_BACKLOG = 1.0
+"""Wall seconds of physics the thread catches up on after a stall; beyond, it skips."""
+PENDING_COMMANDS = 1000
+"""Commands received but not yet applied, at most; beyond, the oldest is dropped (and
+counted). The thread applies them between ticks: only a sender faster than it can
+apply them fills this."""
+TICK_COMMAND_BUDGET = 0.001
+"""Wall seconds a tick spends at most on commands still queued at its start (normally
+none: they are applied between ticks as they come), so that the publication it
+computes stays on time."""
+IDLE_WAIT = 0.05
+"""Wall seconds between checks while paused or halted."""
+LEAD = 0.0025
+"""Wall seconds (at most; also at most a quarter publish period) by which a tick runs
+ahead of the publications it computes; each publication then waits for its due time,
+so its timing does not depend on how long the integration took, nor on a slow
+previous publication (a marker array and a whirl estimate take up to a few ms). A
+command that arrives within this lead applies at most this late. Measured (60 s runs,
+bench_realtime's lag): 2 ms gave a largest lag of 4.4 and 10.2 ms, 2.5 ms of 1.0 and
+5.7 ms."""
+SPIN = 0.0003
+"""Wall seconds before a publication's due time at which its thread stops sleeping and
+polls the clock: this machine (a VM) sometimes wakes a sleeping SCHED_FIFO thread
+milliseconds late, a busy one not. Costs about SPIN x publish_rate of a core (3 % at
+100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms."""
+COMMANDS = ('omega', 'torque')
+"""Kinds of command: an angular-velocity setpoint (rad/s) or a hub torque (N m)."""
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """What the loop is configured with besides the engine (SI units).
+
+    Attributes:
+        publish_rate: publications per second of simulated time, Hz.
+        real_time_factor: simulated seconds per wall second; 0 = as fast as possible.
+        markers: whether samples ever ask for markers.
+        marker_rate: markers per second of simulated time, Hz (and at most twice that
+            per wall second faster than real time).
+        diagnostics_rate: status reports per wall second, Hz (also on a change of level).
+        realtime_priority: SCHED_FIFO priority of the thread while paced (0: ordinary).
+        cpu_dma_latency: CPU wake-up latency requested while paced, us (-1: none).
+    """
+
+    publish_rate: float = 100.0
+    real_time_factor: float = 1.0
+    markers: bool = True
+    marker_rate: float = 20.0
+    diagnostics_rate: float = 1.0
+    realtime_priority: int = 50
+    cpu_dma_latency: int = -1
+
+    def __post_init__(self):
+        for name in ('publish_rate', 'marker_rate', 'diagnostics_rate'):
+            finite_number(name, getattr(self, name), positive=True)
+        finite_number('real_time_factor', self.real_time_factor, nonnegative=True)
+        for name, low, high in (('realtime_priority', 0, scheduling.MAX_PRIORITY),
+                                ('cpu_dma_latency', -1, scheduling.MAX_CPU_LATENCY)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not (
+                    low <= value <= high):
+                raise ValueError(f'{name} must be an integer in [{low}, {high}], '
+                                 f'got {value!r}')
+
+    @property
+    def publish_period(self) -> float:
+        """Simulated time between publications, s."""
+        return 1.0 / self.publish_rate
+
+    @property
+    def publishes_clock(self) -> bool:
+        """Whether simulated time is published as a clock (real_time_factor != 1)."""
+        return self.real_time_factor != 1.0
+
+
+class Sample(NamedTuple):
+    """What is published at one instant."""
+
+    due: float | None
+    """Monotonic wall time at which to publish (None: at once)."""
+    time: float
+    """Simulated time, s."""
+    stamp: float
+    """Stamp time, s: epoch time in real time, simulated time with a published clock."""
+    state: State
+    torque: float
+    frequencies: tuple
+    position: tuple
+    markers: bool
+
+
+class Status(NamedTuple):
+    """A status report: the engine's health and the loop's own counters."""
+
+    stamp: float
+    level: int
+    message: str
+    values: tuple
+
+
+class SystemClock:
+    """The wall clocks and waits of a real run."""
+
+    monotonic = staticmethod(time.monotonic)
+    epoch = staticmethod(time.time)
+
+    @staticmethod
+    def wait(event: threading.Event, timeout: float) -> bool:
+        """Wait for ``event`` up to ``timeout`` s; whether it is set."""
+        return event.wait(timeout)
+
+    @staticmethod
+    def sleep_until(due: float, stop: threading.Event) -> bool:
+        """Return at monotonic time ``due``: sleep, then poll for the last SPIN s.
+
+        False if ``stop`` is set meanwhile.
+        """
+        early = due - time.monotonic() - SPIN
+        if early > 0 and stop.wait(early):
+            return False
+        while time.monotonic() < due:
+            pass
+        return True
+
+
+class RealTimeLoop:
+    """The engine stepped in real time, commands applied, publications on time.
+
+    Args:
+        engine: the simulation.
+        settings: :class:`LoopSettings` (or a subclass: the host's settings).
+        publish: called in the loop's thread as ``publish(sample, settings, config,
+            snapshot)`` at each sample's due time, with the settings and engine config
+            the sample was computed with and what ``snapshot()`` returned then.
+        publish_status: called with a :class:`Status` at ``diagnostics_rate`` and on a
+            change of level.
+        snapshot: called under the lock with each tick's samples (e.g. the host's
+            estimator, which a reset replaces).
+        logger: has ``info``, ``warning``, ``error`` and ``fatal`` (an rclpy logger or
+            a :class:`logging.Logger`); repeated warnings are throttled here.
+        clock: :class:`SystemClock` or a test's fake.
+        running: false once the host is shutting down (an error is then no failure).
+        inputs: what the log calls each kind's input, e.g. {'omega': 'cmd/omega'}
+            (default the kind).
+    """
+
+    def __init__(self, engine: SimulationEngine, settings: LoopSettings, publish, *,
+                 publish_status=None, snapshot=None, logger=None, clock=None,
+                 running=None, inputs=None):
+        self.engine = engine
+        self.settings = settings
+        self._publish = publish
+        self._publish_status = publish_status or (lambda status: None)
+        self._snapshot = snapshot or (lambda: None)
+        self._logger = logger or logging.getLogger(__name__)
+        self.clock = clock or SystemClock()
+        self._running = running or (lambda: True)
+        self._inputs = {kind: kind for kind in COMMANDS} | dict(inputs or {})
+        self.lock = threading.RLock()
+        """Held while the engine or the loop's state changes (re-entrant)."""
+        self._stop = threading.Event()
+        self.paused = False
+        self.overruns = 0
+        """Times the thread fell more than MAX_BACKLOG behind and skipped ahead."""
+        self.failure: str | None = None
+        self._scheduling = scheduling.ThreadScheduling(self._logger, 'physics thread')
+        now = self.clock.monotonic()
+        self._pacer = Pacer(settings.real_time_factor, engine.time, now)
+        self._stamps = StampClock(0.0 if settings.publishes_clock else self.clock.epoch())
+        self._countdown = 0
+        self._published = (engine.time, now)     # (simulated, wall) of the last publication
+        self._samples_since_marker = 0
+        self._next_marker_wall = 0.0
+        self._commands: deque = deque(maxlen=PENDING_COMMANDS)
+        self._command_arrived = threading.Event()
+        self.dropped_commands = 0
+        self._drops_logged = 0
+        self._timeouts_logged = engine.timeouts
+        self._last_level: int | None = None
+        self._next_status = 0.0
+        self._quiet_until: dict = {}
+        self._thread: threading.Thread | None = None
+
+    # ----------------------------------------------------------------- logging
+    def _log(self, level: str, message: str, key: str | None = None,
+             throttle: float = 0.0) -> None:
+        """Log; with a ``key``, at most once per ``throttle`` wall seconds per key."""
+        if key is not None:
+            now = self.clock.monotonic()
+            if now < self._quiet_until.get(key, -1.0):
+                return
+            self._quiet_until[key] = now + throttle
+        # one call site per severity: rclpy's logger binds a call site to one
+        if level == 'info':
+            self._logger.info(message)
+        else:
+            self._logger.warning(message)
+
+    # ----------------------------------------------------------------- timing
+    @property
+    def paced(self) -> bool:
+        """False when running as fast as possible (real_time_factor 0)."""
+        return self._pacer.paced
+
+    @property
+    def _publish_steps(self) -> int:
+        """Physics steps between publications (publication instants are step instants)."""
+        return max(1, round(self.engine.config.physics_rate / self.settings.publish_rate))
+
+    @property
+    def _lead(self) -> float:
+        """Wall seconds a tick runs ahead: LEAD, at most a quarter publish period."""
+        return min(LEAD, 0.25 * self.settings.publish_period / self.settings.real_time_factor)
+
+    @property
+    def _marker_every(self) -> int:
+        return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
+
+    def _restart_clock(self) -> None:
+        """Re-anchor the wall-to-simulated mapping at the current instant."""
+        now = self.clock.monotonic()
+        self._pacer.anchor(self.settings.real_time_factor, self.engine.time, now)
+        self._published = (self.engine.time, now)
+        if not self.settings.publishes_clock:
+            self._stamps.follow_wall(self.engine.time, self.clock.epoch())
+
+    # ----------------------------------------------------------------- commands
+    def submit(self, kind: str, value: float, source: str | None = None) -> None:
+        """Queue a command (any thread; O(1)), stamped with its arrival time.
+
+        ``kind`` is 'omega' (rad/s) or 'torque' (N m); ``source`` names where it came
+        from in log lines (default: the kind's input, see ``inputs``). The loop's
+        thread applies it at the simulated instant it arrived; the oldest of
+        PENDING_COMMANDS pending is dropped (and counted) when a sender outpaces it.
+        """
+        if kind not in COMMANDS:
+            raise ValueError(f'command kind must be one of {COMMANDS}, got {kind!r}')
+        if len(self._commands) == PENDING_COMMANDS:
+            self.dropped_commands += 1               # the deque drops the oldest
+        self._commands.append((kind, value, self.clock.monotonic(),
+                               source or self._inputs[kind]))
+        self._command_arrived.set()
+
+    def _command_time(self, arrived: float) -> float | None:
+        """Simulated time at which a command arrived at ``arrived`` takes effect, or None.
+
+        ``arrived`` is a monotonic wall time; None means at once (the engine's time).
+
+        In real time (factor 1) the simulated time due then. With a published clock,
+        senders run on simulated time and see only what was published, so the latest
+        publication's simulated time plus the wall time from it, at the factor: it
+        follows the simulation's actual progress also when the machine cannot keep
+        up. Not capped above, since when the thread lags, a cap would date a run of
+        arrivals early, and the setpoint shaper relies on delivery delays being
+        one-sided (late, not early). The engine moves a time before its own forward.
+        """
+        if self.paused or self.engine.halted or not self._pacer.paced:
+            return None
+        if self.settings.publishes_clock:
+            sim, wall = self._published
+            return sim + (arrived - wall) * self._pacer.factor
+        return self._pacer.sim_time(arrived)
+
+    def _apply_commands(self, deadline: float | None = None) -> None:
+        """Apply queued commands in order, until none is left or monotonic ``deadline``.
+
+        Called with the lock held. Each takes effect at the simulated time it arrived.
+        """
+        commands, engine, clock = self._commands, self.engine, self.clock
+        n = 0
+        while commands:
+            if deadline is not None and n % 8 == 0 and clock.monotonic() >= deadline:
+                break
+            n += 1
+            kind, value, arrived, source = commands.popleft()
+            timed_out = engine.timed_out_at is not None
+            at = self._command_time(arrived)
+            try:
+                if kind == 'omega':
+                    engine.command_omega(value, at=at)
+                else:
+                    engine.command_torque(value, at=at)
+            except CommandRejected as exc:
+                # throttled per source: a rejection on one must not silence another's
+                self._log('warning', f'{source} rejected: {exc}', 'rejected ' + source, 1.0)
+                continue
+            if timed_out:
+                self._log('info', f'{source}: commands again after the command timeout',
+                          'again ' + source, 1.0)
+        if self.dropped_commands != self._drops_logged:
+            self._log('warning', f'commands arrive faster than they can be applied: '
+                      f'{self.dropped_commands} dropped so far (the oldest of '
+                      f'{PENDING_COMMANDS} pending)', 'dropped', 1.0)
+            self._drops_logged = self.dropped_commands
+
+    def _log_timeout(self) -> None:
+        """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""
+        eng = self.engine
+        if eng.timeouts == self._timeouts_logged:
+            return
+        self._timeouts_logged = eng.timeouts
+        if eng.timed_out_at is None:       # already over (a halt and a reset since)
+            return
+        cfg = eng.config
+        action = (f'spinning down to 0 at max_angular_acceleration '
+                  f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
+                  else 'hub torque set to 0 (free coast)')
+        kind = 'omega' if cfg.drive == 'velocity' else 'torque'
+        self._log('warning', f'no command on {self._inputs[kind]} for '
+                  f'{cfg.command_timeout:g} s (command_timeout) at simulated time '
+                  f'{eng.timed_out_at:.3f} s: {action}', 'timeout', 1.0)
+
+    # ----------------------------------------------------------------- control
+    def reconfigure(self, config, settings: LoopSettings) -> None:
+        """Switch to a (validated) engine config and settings, keeping state and clock.
+
+        Commands that came before the change are applied first, under the old config.
+        """
+        with self.lock:
+            self._apply_commands()
+            if config != self.engine.config:
+                self.engine.reconfigure(config)
+            old, self.settings = self.settings, settings
+            if settings.real_time_factor != old.real_time_factor:
+                self._restart_clock()
+            self._countdown = min(self._countdown, self._publish_steps)
+
+    def reset(self) -> tuple:
+        """Back to the initial state; clears a halt and the pending commands.
+
+        Returns (the halt cleared or None, the simulated time). The publication grid
+        goes on, so the first state after the reset is stamped after any publication
+        the thread still has to send from before it.
+        """
+        with self.lock:
+            self._commands.clear()           # superseded by the reset
+            was_halted = self.engine.halted
+            self.engine.reset()
+            self._restart_clock()
+            return was_halted, self.engine.time
+
+    def pause(self, paused: bool) -> str:
+        """Pause (True) or resume (False) simulated time; what was done, as a sentence."""
+        with self.lock:
+            if paused and not self.paused:
+                self.paused = True
+                return f'paused at simulated time {self.engine.time:.3f} s'
+            if not paused and self.paused:
+                self.paused = False
+                self._restart_clock()
+                return f'resumed at simulated time {self.engine.time:.3f} s'
+            return 'already ' + ('paused' if self.paused else 'running')
+
+    # ----------------------------------------------------------------- the thread
+    def start(self) -> None:
+        """Start the loop's thread; simulated time starts from now."""
+        with self.lock:
+            self._restart_clock()
+        self._thread = threading.Thread(target=self.run, name='rotrod_physics', daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop the loop's thread (returns when it has ended)."""
+        self._stop.set()
+        self._command_arrived.set()
+        if self._thread is not None and self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+
+    def run(self) -> None:
+        """The thread's body: cycles until stopped; a failure is logged and reported."""
+        try:
+            while not self._stop.is_set() and self.cycle():
+                pass
+        except Exception as exc:  # report any failure, then stop the physics
+            if self._stop.is_set() or not self._running():
+                return
+            self.failure = f'physics thread failed: {exc!r}'
+            self._logger.fatal(self.failure + '\n' + traceback.format_exc())
+            self.report(force=True)
+        finally:
+            self._scheduling.release()
+
+    def cycle(self) -> bool:
+        """One pass: commands, a tick, its publications on time, status, idle to the next.
+
+        Returns False when stopping.
+        """
+        if self._schedule():
+            # the clock starts (or goes on) from here: the change and its log lines took
+            # tens of ms at the node's start (measured: 44 ms), which the first tick
+            # would otherwise have caught up on in a burst of late publications
+            with self.lock:
+                self._restart_clock()
+        with self.lock:
+            self._apply_commands(deadline=self.clock.monotonic() + TICK_COMMAND_BUDGET)
+            samples, wake = self._tick()
+            # what the samples were computed with, also if a service or a parameter
+            # change replaces it while they are being published
+            context = self.settings, self.engine.config, self._snapshot()
+        for sample in samples:
+            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop):
+                return False
+            self._published = (sample.time, self.clock.monotonic())
+            self._publish(sample, *context)
+        self.report()
+        # the next tick is due at an absolute time: the publication's wait and the work
+        # after it (estimate, status) must not delay it
+        return wake is None or self._idle_until(wake)
+
+    def _sample(self) -> Sample:
+        eng = self.engine
+        self._samples_since_marker += 1
+        markers = self.settings.markers and self._samples_since_marker >= self._marker_every
+        if markers:
+            # a viewer shows markers in wall time: faster than real time, at most twice
+            # marker_rate per wall second (as fast as possible, markers every 10 ms of
+            # simulated time cost a third of the speed)
+            now = self.clock.monotonic()
+            markers = now >= self._next_marker_wall
+            if markers:
+                self._samples_since_marker = 0
+                self._next_marker_wall = now + 0.5 / self.settings.marker_rate
+        due = self._pacer.wall_time(eng.time) if self._pacer.paced else None
+        return Sample(due, eng.time, self._stamps.stamp(eng.time), eng.state, eng.torque,
+                      eng.frequencies(), eng.inertial_position(), markers)
+
+    def _tick(self) -> tuple[list, float | None]:
+        """Integrate up to the time due now (lock held).
+
+        Returns the samples to publish and the monotonic wall time at which the next
+        tick is due (None: at once).
+        """
+        eng = self.engine
+        if self.paused or eng.halted:
+            return [], self.clock.monotonic() + IDLE_WAIT
+        pacer = self._pacer
+        if pacer.paced:
+            now = self.clock.monotonic()
+            target = pacer.sim_time(now + self._lead)
+            if target - eng.time > MAX_BACKLOG * pacer.factor:
+                self.overruns += 1
+                self._log('warning', f'fell {target - eng.time:.3f} s of simulated time '
+                          'behind the clock; skipping ahead', 'backlog', 5.0)
+                self._restart_clock()
+                target = eng.time
+        samples = []
+        while True:
+            n = self._countdown
+            if pacer.paced:
+                n = min(n, eng.steps_until(target))
+                if n == 0 and self._countdown > 0:
+                    break
+            done = eng.advance(n)
+            self._countdown -= done
+            if done < n:                      # halted
+                self._logger.error(f'simulation halted: {eng.halted}; call ~/reset')
+                break
+            if self._countdown == 0:
+                samples.append(self._sample())
+                self._countdown = self._publish_steps
+                if not pacer.paced:
+                    break
+        self._log_timeout()
+        wake = None
+        if pacer.paced and not eng.halted:
+            wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
+        return samples, wake
+
+    def _idle_until(self, wake: float) -> bool:
+        """Apply commands as they come until monotonic time ``wake``; False if stopping."""
+        event, clock = self._command_arrived, self.clock
+        while not self._stop.is_set():
+            left = wake - clock.monotonic()
+            if left <= 0:
+                return True
+            event.clear()
+            if self._commands:
+                with self.lock:
+                    self._apply_commands(deadline=wake)
+            else:
+                clock.wait(event, left)
+        return False
+
+    def _schedule(self) -> bool:
+        """Run at ``realtime_priority`` and hold ``cpu_dma_latency`` while paced.
+
+        As fast as possible there is nothing to be on time for (and a real-time thread
+        that never sleeps would starve ordinary ones), so then neither.
+
+        Returns whether anything was changed (or tried and refused).
+        """
+        s, paced = self.settings, self._pacer.paced
+        return self._scheduling.update(s.realtime_priority if paced else 0,
+                                       s.cpu_dma_latency if paced else -1)
+
+    # ----------------------------------------------------------------- status
+    def report(self, force: bool = False) -> None:
+        """Send a :class:`Status` if the level changed, it is due, or ``force``."""
+        with self.lock:
+            health = self.engine.health()
+            level, message = health.level, health.message
+            if self.failure:
+                level, message = ERROR, self.failure
+            elif self.paused:
+                message = 'paused; ' + message
+            now = self.clock.monotonic()
+            if not force and level == self._last_level and now < self._next_status:
+                return
+            self._last_level = level
+            self._next_status = now + 1.0 / self.settings.diagnostics_rate
+            values = (*health.values, ('paused', self.paused),
+                      ('real_time_factor', self.settings.real_time_factor),
+                      ('overruns', self.overruns),
+                      ('dropped_commands', self.dropped_commands))
+            stamp = self._stamps.stamp(self.engine.time)
+        self._publish_status(Status(stamp, level, message, values))
