@@ -331,6 +331,7 @@ def run_magnus(kind: int, co: Coefficients, profile: Profile, nodes: np.ndarray,
                     x[:, 3] -= dw * (re + x[:, 0])
                 Z[kk] = x[:, 0] + 1j * x[:, 1]
                 P[kk] = x[:, 2] + 1j * x[:, 3]
+            z, p = Z[stop].copy(), P[stop].copy()
     return _Stored(Z, P)
 
 
