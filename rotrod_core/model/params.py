@@ -57,6 +57,12 @@ DEFAULT_HUB_INERTIA = disk_inertia(DEFAULT_HUB_RADIUS, DEFAULT_HUB_THICKNESS)
 
 SECTIONS = ('circular', 'rectangular')
 
+FIELD_UNITS = {'mass': 'kg', 'rod_length': 'm', 'rod_diameter': 'm', 'youngs_modulus': 'Pa',
+               'eccentricity': 'm', 'hub_inertia': 'kg m^2', 'damping_ratio': '-',
+               'section_width': 'm', 'section_thickness': 'm', 'gravity': 'm/s^2',
+               'rod_density': 'kg/m^3'}
+"""The numeric fields of :class:`RodParams` and their SI units ('-': dimensionless)."""
+
 
 def _check(name: str, value: Any, *, positive: bool = False, nonnegative: bool = False,
            optional: bool = False):

@@ -171,8 +171,12 @@ def _output_times(t_end, dt, output_interval, record_every):
     return None
 
 
-def _velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
-    """Run a chunk of velocity-drive systems (local threads over blocks of systems)."""
+def velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
+    """Run a chunk of velocity-drive systems on a plan (threads over blocks of systems).
+
+    Returns :func:`rotrod_core.offline.batch_velocity.run`'s dict for the chunk. A task
+    of :func:`simulate_batch` and of the sweeps on Dask.
+    """
     n = np.size(co.w1sq)
     blocks = [slice(i, min(i + block, n)) for i in range(0, n, block)]
     out = {}
@@ -209,6 +213,15 @@ def _on_client(client, fn, jobs: list) -> list:
     return client.gather(futures)
 
 
+def default_chunk_size(n: int, client) -> int:
+    """Systems per Dask task: two tasks per worker, in whole blocks of :data:`BLOCK`.
+
+    Whole blocks make a run on a client equal, bit for bit, to the same run without one.
+    """
+    nworkers = max(1, len(client.scheduler_info().get('workers', {})))
+    return BLOCK * max(1, math.ceil(n / (2 * nworkers * BLOCK)))
+
+
 def simulate_batch(params: RodParams, profile: Profile | None = None,
                    t_end: float | None = None, dt: float | None = None, *, torque=None,
                    coupling: str = 'exact', initial: dict | None = None,
@@ -242,8 +255,8 @@ def simulate_batch(params: RodParams, profile: Profile | None = None,
             cannot be pickled, or a multi-threaded caller, keeps RK4 in one process.
         client: a ``dask.distributed.Client``: chunks of systems run as tasks on its
             workers (the torque, profile and rotrod_core must be importable there).
-        chunk_size: systems per Dask task (default: the batch split into two tasks per
-            worker, at least 256 systems each).
+        chunk_size: systems per Dask task (default :func:`default_chunk_size`; a size
+            that is not a multiple of :data:`BLOCK` changes results by rounding only).
 
     Returns:
         :class:`BatchResult` with peak deflection, its time, the final state and the
@@ -286,8 +299,7 @@ def simulate_batch(params: RodParams, profile: Profile | None = None,
     if workers is None:
         workers = min(2, os.cpu_count() or 1)
     if client is not None and chunk_size is None:
-        nworkers = max(1, len(client.scheduler_info().get('workers', {})))
-        chunk_size = max(256, math.ceil(n / (2 * nworkers)))
+        chunk_size = default_chunk_size(n, client)
     if method == 'exponential':
         return _velocity_batch(co_all, n, shape, profile, t_end, dt, init, tolerance,
                                _output_times(t_end, dt, output_interval, record_every),
@@ -314,13 +326,13 @@ def _velocity_batch(co_all, n, shape, profile, t_end, dt, init, tolerance, outpu
     the_plan = velocity.plan(co_all, profile, t_end, tolerance, output_times, max_step=dt,
                              z0=z0, p0=p0)
     if client is None:
-        out = _velocity_chunk(co_all, profile, the_plan, z0, p0, workers)
+        out = velocity_chunk(co_all, profile, the_plan, z0, p0, workers)
     else:
         jobs = []
         for lo, hi in _chunks(n, chunk_size):
             sub, _ = _cut(co_all, {}, lo, hi)
             jobs.append((sub, profile, the_plan, z0[lo:hi], p0[lo:hi], 1))
-        parts = _on_client(client, _velocity_chunk, jobs)
+        parts = _on_client(client, velocity_chunk, jobs)
         out = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     theta = value('theta') + float(profile.angle(t_end))
     final = model.State(out['z'].real.copy(), out['z'].imag.copy(), out['p'].real.copy(),
