@@ -138,17 +138,22 @@ def _run_chunk(co, n, t, profile, torque, coupling, init, record_every):
     return state, np.sqrt(peak2), peak_t, rec
 
 
+def flat_coefficients(params: RodParams) -> Coefficients:
+    """The Coefficients of every system of ``params``, each field an array (n,)."""
+    shape = params.shape
+    n = int(np.prod(shape)) if shape else 1
+    co = Coefficients.from_params(params)
+    return Coefficients(**{k: (None if v is None else
+                               np.broadcast_to(np.asarray(v, float), shape).ravel().copy()
+                               if shape else np.full(n, float(v)))
+                           for k, v in vars(co).items()})
+
+
 def _flat_batch(params: RodParams, initial: dict | None):
     """(n, shape, Coefficients of the flat batch, initial values flattened)."""
     shape = params.shape
     n = int(np.prod(shape)) if shape else 1
-    flat = {name: np.broadcast_to(value, shape).ravel() if shape else value
-            for name, value in params._numeric().items()}
-    co = Coefficients.from_params(params.replace(**flat)) if shape else \
-        Coefficients.from_params(params)
-    if not shape:       # one system: arrays of length 1 all the same
-        co = Coefficients(**{k: (np.array([v]) if v is not None else v)
-                             for k, v in vars(co).items()})
+    co = flat_coefficients(params)
     init = {}
     for k, v in (initial or {}).items():
         arr = np.asarray(v, dtype=float)

@@ -62,6 +62,14 @@ def system_kinds(co: Coefficients) -> np.ndarray:
     return np.where(iso & (g1 == 0), 0, np.where(iso, 1, 2)).astype(int)
 
 
+def as_arrays(co: Coefficients) -> Coefficients:
+    """``co`` with every field an array of the batch's length (scalars broadcast)."""
+    n = max(np.size(v) for v in vars(co).values() if v is not None)
+    return Coefficients(**{k: (None if v is None else
+                               np.broadcast_to(np.asarray(v, float), (n,)).copy())
+                           for k, v in vars(co).items()})
+
+
 def subset(co: Coefficients, idx) -> Coefficients:
     """The coefficients of the systems ``idx`` (arrays stay arrays)."""
     return Coefficients(**{k: (np.asarray(v)[idx] if np.ndim(v) else v)
@@ -523,6 +531,7 @@ class VelocityPlan:
 def plan(co: Coefficients, profile: Profile, t_end: float, tolerance: float,
          output_times=None, max_step: float | None = None, z0=0j, p0=0j) -> VelocityPlan:
     """Choose the node grid of every integrator for the batch ``co`` (module docstring)."""
+    co = as_arrays(co)
     kinds = system_kinds(co)
     points = mandatory_times(profile, t_end, output_times)
     sampled = np.linspace(0.0, t_end, 2001)
@@ -630,6 +639,7 @@ def run(co: Coefficients, profile: Profile, the_plan: VelocityPlan, z0, p0) -> d
     ``peak``, ``peak_time`` (n,), and ``u``, ``v``, ``du``, ``dv`` (n, len(output_times))
     if recorded.
     """
+    co = as_arrays(co)
     n = np.size(co.w1sq)
     kinds = system_kinds(co)
     z0 = np.broadcast_to(np.asarray(z0, complex), (n,))

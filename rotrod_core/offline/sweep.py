@@ -32,9 +32,13 @@ import numpy as np
 
 import rotrod_core.offline.batch_velocity as velocity
 from rotrod_core.command.profiles import Profile
-from rotrod_core.model.equations import Coefficients
 from rotrod_core.model.params import FIELD_UNITS, RodParams
-from rotrod_core.offline.batch import BLOCK, DEFAULT_TOLERANCE, velocity_chunk
+from rotrod_core.offline.batch import (
+    BLOCK,
+    DEFAULT_TOLERANCE,
+    flat_coefficients,
+    velocity_chunk,
+)
 
 MAX_RUNS = 10_000_000
 """Largest number of parameter sets a sweep accepts."""
@@ -266,7 +270,7 @@ def run_sweep(table: dict, profile: Profile, t_end: float, *, base: RodParams | 
     valid = [c for c in chunks if c[1] is not None]
     the_plan = None
     if valid:
-        co_all = Coefficients.from_params(_concatenate([c[1] for c in valid], base))
+        co_all = flat_coefficients(_concatenate([c[1] for c in valid], base))
         the_plan = velocity.plan(co_all, profile, t_end, tolerance)
     theta_end, omega_end = float(profile.angle(t_end)), float(profile.omega(t_end))
 
@@ -296,7 +300,7 @@ def run_sweep(table: dict, profile: Profile, t_end: float, *, base: RodParams | 
             if s == 'ok':
                 summary.ok += 1
             else:
-                summary.problems.append((int(i), {k: float(v[int(i - result.index[0])])
+                summary.problems.append((int(i), {k: float(v[int(i)])
                                                   for k, v in table.items()}, s))
         emit(result)
 
@@ -305,7 +309,7 @@ def run_sweep(table: dict, profile: Profile, t_end: float, *, base: RodParams | 
         if params is None:
             finish(chunk_result(rows, None, good, reasons))
             continue
-        co = Coefficients.from_params(params)
+        co = flat_coefficients(params)
         zeros = np.zeros(len(good), complex)
         job = (co, profile, the_plan, zeros, zeros, 1)
         if client is None:
