@@ -17,20 +17,22 @@ the deflection over 40 s of a velocity-drive run (``bench/bench_core.py``) and t
 exact coupling conserves energy and angular momentum to ~1e-12 relative (tests).
 Check a torque-drive batch by halving ``dt``.
 
-Parallelism: locally, blocks of systems run on ``workers`` threads (velocity drive:
-numpy releases the GIL in its array operations) or forked processes (RK4: many short
-numpy calls). With a ``dask.distributed.Client`` the chunks of systems run as tasks on
-its workers and come back as one result in input order (``docs/sweeps.md``).
+Parallelism: locally, blocks of systems run on ``workers`` forked processes (from a
+single-threaded caller; otherwise in this process): velocity drive writes into shared
+memory, RK4 returns its chunks. With a ``dask.distributed.Client`` the chunks of
+systems run as tasks on its workers and come back as one result in input order
+(``docs/sweeps.md``).
 """
 
 from __future__ import annotations
 
 import math
+import mmap
 import multiprocessing
 import os
 import pickle
 import threading
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -176,29 +178,59 @@ def _output_times(t_end, dt, output_interval, record_every):
     return None
 
 
-def velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
-    """Run a chunk of velocity-drive systems on a plan (threads over blocks of systems).
+def _shared_array(shape: tuple, dtype) -> np.ndarray:
+    """A zeroed array in anonymous shared memory (forked children write into it)."""
+    nbytes = max(1, int(np.prod(shape)) * np.dtype(dtype).itemsize)
+    return np.frombuffer(mmap.mmap(-1, nbytes), dtype=dtype,
+                         count=int(np.prod(shape))).reshape(shape)
 
-    Returns :func:`rotrod_core.offline.batch_velocity.run`'s dict for the chunk. A task
-    of :func:`simulate_batch` and of the sweeps on Dask.
+
+_FORKED_JOB = None      # what forked children of velocity_chunk read (set before the fork)
+
+
+def _run_blocks(blocks):
+    co, profile, the_plan, z0, p0, out = _FORKED_JOB
+    for b in blocks:
+        part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
+        for k, v in part.items():
+            out[k][b] = v
+
+
+def velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
+    """Run a chunk of velocity-drive systems on a plan, in blocks of ``block`` systems.
+
+    With ``workers`` > 1 and a single-threaded caller the blocks are shared among
+    forked processes writing into shared memory (threads would serialise on the GIL and
+    on page faults); otherwise they run here one after the other. Returns
+    :func:`rotrod_core.offline.batch_velocity.run`'s dict for the chunk. A task of
+    :func:`simulate_batch` on a client and of the sweeps.
     """
     n = np.size(co.w1sq)
     blocks = [slice(i, min(i + block, n)) for i in range(0, n, block)]
-    out = {}
-
-    def one(b):
-        part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
-        for k, v in part.items():
-            if k not in out:
-                out.setdefault(k, np.empty((n,) + v.shape[1:], v.dtype))
-            out[k][b] = v
-    if len(blocks) == 1 or workers <= 1:
+    if workers <= 1 or len(blocks) < 2 or not _can_fork(None):
+        out = {}
         for b in blocks:
-            one(b)
-    else:
-        one(blocks[0])          # allocates the outputs
-        with ThreadPoolExecutor(min(workers, len(blocks) - 1)) as pool:
-            list(pool.map(one, blocks[1:]))
+            part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
+            for k, v in part.items():
+                if k not in out:
+                    out[k] = np.empty((n,) + v.shape[1:], v.dtype)
+                out[k][b] = v
+        return out
+    global _FORKED_JOB
+    nout = 0 if the_plan.output_times is None else len(the_plan.output_times)
+    out = {'z': _shared_array((n,), complex), 'p': _shared_array((n,), complex),
+           'peak': _shared_array((n,), float), 'peak_time': _shared_array((n,), float)}
+    if the_plan.output_times is not None:
+        out.update({k: _shared_array((n, nout), float) for k in ('u', 'v', 'du', 'dv')})
+    _FORKED_JOB = (co, profile, the_plan, z0, p0, out)
+    try:
+        groups = [list(g) for g in np.array_split(np.array(blocks, dtype=object),
+                                                  min(workers, len(blocks)))]
+        ctx = multiprocessing.get_context('fork')
+        with ProcessPoolExecutor(len(groups), mp_context=ctx) as pool:
+            list(pool.map(_run_blocks, groups))
+    finally:
+        _FORKED_JOB = None
     return out
 
 
@@ -255,9 +287,10 @@ def simulate_batch(params: RodParams, profile: Profile | None = None,
             ``output_interval = record_every * dt``.
         method: ``'exponential'`` (velocity drive's default) or ``'rk4'`` (torque drive,
             always; in velocity drive the previous fixed-step integrator).
-        workers: local parallelism: threads (exponential) or processes (RK4, batches
-            of >= 4000 systems); default one per core, up to 2. A torque function that
-            cannot be pickled, or a multi-threaded caller, keeps RK4 in one process.
+        workers: local parallelism: forked processes (exponential: batches of more than
+            one block of :data:`BLOCK` systems; RK4: of >= 4000 systems); default one per
+            core, up to 2. A multi-threaded caller (a ROS node, a Dask worker), or a
+            torque function that cannot be pickled, keeps the run in one process.
         client: a ``dask.distributed.Client``: chunks of systems run as tasks on its
             workers (the torque, profile and rotrod_core must be importable there).
         chunk_size: systems per Dask task (default :func:`default_chunk_size`; a size

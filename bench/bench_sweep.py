@@ -1,0 +1,85 @@
+"""Sweeps on Dask: throughput with 1 and 2 LocalCluster workers, overhead vs in-process.
+
+    .venv/bin/python bench/bench_sweep.py [--quick] [--json FILE]
+
+The same Monte Carlo parameter sets (bench_core.monte_carlo_rods, damping ratios 0-0.02,
+so most runs take the sixth-order Magnus integrator) run through ``run_sweep`` on a
+LocalCluster of 1, then 2 worker processes (one thread each, 127.0.0.1, no dashboard),
+and through ``simulate_batch`` in this process (2 threads). Cluster start-up is not
+timed; each sweep is timed from its first task to its last result (best of 2).
+"""
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / 'test'), str(ROOT / 'bench')]
+
+import results  # noqa: E402  (bench/results.py)
+from bench_core import monte_carlo_rods  # noqa: E402
+from results import Comparison, Row, Target  # noqa: E402
+
+from rotrod_core import Eq26Profile, simulate_batch  # noqa: E402
+from rotrod_core.offline.sweep import SweepClient, run_sweep  # noqa: E402
+
+
+def sweep_rate(table, workers: int, repeat: int = 2) -> float:
+    """Best runs/s of run_sweep over ``table`` on a LocalCluster of ``workers`` processes."""
+    n = len(next(iter(table.values())))
+    best = 0.0
+    with SweepClient(None, workers=workers) as client:
+        run_sweep({k: v[:256] for k, v in table.items()}, Eq26Profile(), 40.0,
+                  client=client, chunk_size=128)                       # warm the workers
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            summary = run_sweep(table, Eq26Profile(), 40.0, client=client, chunk_size=1024)
+            rate = n / (time.perf_counter() - t0)
+            if summary.ok != n:
+                raise RuntimeError(f'the sweep lost runs: {summary.ok} of {n}')
+            best = max(best, rate)
+    return best
+
+
+def measure(quick: bool = False) -> list:
+    """Run the sweep benchmarks; return their rows."""
+    n = 4096 if quick else 16384
+    params = monte_carlo_rods(n, damping=0.02)
+    fields = ('eccentricity', 'rod_diameter', 'mass', 'youngs_modulus', 'damping_ratio')
+    table = {k: getattr(params, k) for k in fields}
+    one = sweep_rate(table, 1)
+    two = sweep_rate(table, 2)
+    best = 0.0
+    for _ in range(2):
+        t0 = time.perf_counter()
+        simulate_batch(params, Eq26Profile(), 40.0, workers=2)
+        best = max(best, n / (time.perf_counter() - t0))
+    what = f'{n} Eq. 26 runs x 40 s, damping ratios 0-0.02, chunks of 1024'
+    return [
+        Row('sweep', f'run_sweep on a LocalCluster of 2 worker processes, {what}: '
+                     'throughput (best of 2)', two, 'runs/s', better='higher',
+            target=Target('>=', 1.8, text='>= 1.8x the 1-worker throughput', on='ratio'),
+            comparisons=[Comparison('1 worker process', one)], fmt='.4g'),
+        Row('sweep', f'run_sweep on 2 workers against simulate_batch in this process '
+                     f'(2 threads), {what}: throughput', two, 'runs/s', better='higher',
+            comparisons=[Comparison('simulate_batch, in process, 2 threads', best)],
+            note=f'overhead {100 * (best / two - 1):.0f} % of the in-process time'
+            if two < best else 'no overhead measured', fmt='.4g'),
+    ]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--quick', action='store_true', help='4096 runs instead of 16384')
+    ap.add_argument('--json', type=Path, help='write the rows as JSON here')
+    args = ap.parse_args()
+    rows = measure(quick=args.quick)
+    print(results.markdown(rows, bench_column=False))
+    if args.json:
+        results.dump(args.json, rows)
+    return 0 if all(r.met is not False for r in rows) else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())
