@@ -6,10 +6,11 @@
     .venv/bin/python bench/run_all.py --quick --write # ... and written anyway
     .venv/bin/python bench/run_all.py --no-write      # full run, README untouched
 
-Runs bench_core.py, bench_estimator.py and bench_realtime.py one after the other, each
-as its own process writing its rows as JSON (bench/results.py); their own tables go to
-stderr. The combined table, stamped with the date, the machine, the load average at
-start, the code measured and this command, goes to stdout and replaces what lies
+Runs bench_core.py, bench_sweep.py, bench_estimator.py and bench_realtime.py one after
+the other, each as its own process writing its rows as JSON (bench/results.py); their
+own tables go to stderr. The combined table, stamped with the date, the machine, the
+load average at start, the code measured and this command, goes to stdout and replaces
+what lies
 between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in README.md; nothing
 outside the markers is touched. A bench that fails, or a row with a missing value,
 stops the run before README is written. Exit status: 0 when every target is met,
@@ -39,7 +40,7 @@ import results  # noqa: E402  (bench/results.py)
 
 BEGIN = '<!-- bench:begin -->'
 END = '<!-- bench:end -->'
-PACKAGES = ('numpy', 'scipy', 'rerun-sdk', 'rclpy')
+PACKAGES = ('numpy', 'scipy', 'rerun-sdk', 'rclpy', 'dask', 'distributed', 'pyarrow')
 STAMP_KEYS = ('date', 'command', 'run time', 'machine', 'OS', 'Python', 'packages',
               'load average at start', 'code')
 
@@ -274,6 +275,7 @@ def main(argv: list | None = None) -> int:
         rewrite(args.readme.read_text(), '')      # markers checked before an hour's work
     rows, notes, loads = [], [], []
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
+               ('bench_sweep.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
                ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600)]
     with tempfile.TemporaryDirectory(prefix='rotrod-bench-') as tmp:

@@ -362,15 +362,12 @@ class _Stored:
 class _Whirls:
     """The inertial whirl amplitudes at every node; z and z' formed where asked."""
 
-    def __init__(self, A, B, w0, re, profile, nodes):
-        self.A, self.B, self.w0, self.re = A, B, w0, re
-        self.rot = np.exp(1j * profile.angle(nodes))        # e^(i theta_k)
-        self.omega = profile.omega(nodes)
+    def __init__(self, A, B, r2, w0, re, rot, omega):
+        self.A, self.B, self._r2, self.w0, self.re = A, B, r2, w0, re
+        self.rot, self.omega = rot, omega               # e^(i theta_k), w(t_k)
 
     def r2(self):
-        C = self.A + self.B
-        C -= self.rot[:, None] * self.re
-        return C.real ** 2 + C.imag ** 2
+        return self._r2
 
     def at(self, k, j):
         a, b = self.A[k, j], self.B[k, j]
@@ -413,36 +410,49 @@ def run_exact(co: Coefficients, profile: Profile, nodes: np.ndarray, z0, p0):
     K = len(nodes) - 1
     h = np.diff(nodes)
     # panels of (nearly) the same length share their per-system factors
-    groups = np.round(h / h.max(), 9)
-    values, which = np.unique(groups, return_inverse=True)
+    values, which = np.unique(np.round(h / h.max(), 9), return_inverse=True)
     c = w0 * re / 2j
-    Sm = np.empty((K, n), complex)
-    Sp = np.empty((K, n), complex)
-    turn, back = [], []
+    hg = np.array([float(np.mean(h[which == g])) for g in range(len(values))])
+    s_q = nodes[:-1, None] + hg[which][:, None] * _GL_X[None, :]
+    G = (hg[which][:, None] * _GL_W[None, :]) * np.exp(1j * profile.angle(s_q))    # (K, Q)
+    minus, plus, turn, back = [], [], [], []
     for g in range(len(values)):
-        idx = np.nonzero(which == g)[0]
-        hg = float(np.mean(h[idx]))
-        s_q = nodes[idx, None] + hg * _GL_X[None, :]
-        G = (hg * _GL_W)[None, :] * np.exp(1j * profile.angle(s_q))
-        phase = np.exp(-1j * hg * np.outer(_GL_X, w0))            # (Q, n)
-        Sm[idx] = G @ (phase * c)
-        Sp[idx] = G @ (phase.conj() * -c)
-        f = np.exp(1j * w0 * hg)
+        phase = np.exp(-1j * hg[g] * np.outer(_GL_X, w0))           # (Q, n)
+        minus.append(phase * c)
+        plus.append(phase.conj() * -c)
+        f = np.exp(1j * w0 * hg[g])
         turn.append(f)
         back.append(1.0 / f)
+    rot = np.exp(1j * profile.angle(nodes))
     Zin = re + z0
     dZin = p0 + 1j * float(profile.omega(0.0)) * Zin
     A = np.empty((K + 1, n), complex)
     B = np.empty((K + 1, n), complex)
+    r2 = np.empty((K + 1, n))
     A[0] = 0.5 * (Zin + dZin / (1j * w0))
     B[0] = 0.5 * (Zin - dZin / (1j * w0))
-    for k in range(K):
-        g = which[k]
-        np.add(A[k], Sm[k], out=A[k + 1])
-        np.multiply(A[k + 1], turn[g], out=A[k + 1])
-        np.add(B[k], Sp[k], out=B[k + 1])
-        np.multiply(B[k + 1], back[g], out=B[k + 1])
-    return _Whirls(A, B, w0, re, profile, nodes)
+    C = A[0] + B[0] - rot[0] * re
+    r2[0] = C.real ** 2 + C.imag ** 2
+    # the panel sums of all steps, by few large matrix products (BLAS)
+    Sm = np.empty((K, n), complex)
+    Sp = np.empty((K, n), complex)
+    for g in range(len(values)):
+        rows = np.nonzero(which == g)[0]
+        Sm[rows] = G[rows] @ minus[g]
+        Sp[rows] = G[rows] @ plus[g]
+    for start in range(0, K, _STEP_CHUNK):
+        stop = min(start + _STEP_CHUNK, K)
+        for k in range(start, stop):
+            g = which[k]
+            np.add(A[k], Sm[k], out=A[k + 1])
+            np.multiply(A[k + 1], turn[g], out=A[k + 1])
+            np.add(B[k], Sp[k], out=B[k + 1])
+            np.multiply(B[k + 1], back[g], out=B[k + 1])
+        C = A[start + 1:stop + 1] + B[start + 1:stop + 1]
+        C -= rot[start + 1:stop + 1, None] * re
+        np.multiply(C.real, C.real, out=r2[start + 1:stop + 1])
+        r2[start + 1:stop + 1] += C.imag ** 2
+    return _Whirls(A, B, r2, w0, re, rot, profile.omega(nodes))
 
 
 def run_kind(kind: int, co, profile, nodes, z0, p0):
