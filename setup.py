@@ -39,6 +39,8 @@ setup(
         # rclpy and the standard messages from PyPI wheels (a ROS install provides them).
         'ros': ['ros-jazzy-rclpy[fastrtps]', 'ros-jazzy-common-interfaces'],
         'viz': ['rerun-sdk', 'matplotlib'],
+        # parameter sweeps on a Dask cluster and their Parquet files (docs/sweeps.md)
+        'sweep': ['dask[distributed]', 'pyarrow'],
         'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff',
                 'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py'],
     },
