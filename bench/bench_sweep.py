@@ -5,8 +5,9 @@
 The same Monte Carlo parameter sets (bench_core.monte_carlo_rods, damping ratios 0-0.02,
 so most runs take the sixth-order Magnus integrator) run through ``run_sweep`` on a
 LocalCluster of 1, then 2 worker processes (one thread each, 127.0.0.1, no dashboard),
-and through ``simulate_batch`` in this process (2 threads). Cluster start-up is not
-timed; each sweep is timed from its first task to its last result (best of 2).
+on 1 worker started with Dask's default allocator setting, and through
+``simulate_batch`` in this process (2 forked processes). Cluster start-up is not timed;
+each sweep is timed from its first task to its last result (best of 2).
 """
 
 import argparse
@@ -25,11 +26,31 @@ from rotrod_core import Eq26Profile, simulate_batch  # noqa: E402
 from rotrod_core.offline.sweep import SweepClient, run_sweep  # noqa: E402
 
 
-def sweep_rate(table, workers: int, repeat: int = 2) -> float:
+class DaskDefaultCluster:
+    """A LocalCluster as Dask starts it by default (MALLOC_TRIM_THRESHOLD_=65536)."""
+
+    def __init__(self, workers):
+        self.workers = workers
+
+    def __enter__(self):
+        from distributed import Client, LocalCluster
+        self.cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1,
+                                    host='127.0.0.1', dashboard_address=None)
+        self.client = Client(self.cluster)
+        return self.client
+
+    def __exit__(self, *exc):
+        self.client.close()
+        self.cluster.close()
+        return False
+
+
+def sweep_rate(table, workers: int, repeat: int = 2, dask_default: bool = False) -> float:
     """Best runs/s of run_sweep over ``table`` on a LocalCluster of ``workers`` processes."""
     n = len(next(iter(table.values())))
     best = 0.0
-    with SweepClient(None, workers=workers) as client:
+    cluster = DaskDefaultCluster(workers) if dask_default else SweepClient(None, workers)
+    with cluster as client:
         run_sweep({k: v[:256] for k, v in table.items()}, Eq26Profile(), 40.0,
                   client=client, chunk_size=128)                       # warm the workers
         for _ in range(repeat):
@@ -50,6 +71,7 @@ def measure(quick: bool = False) -> list:
     table = {k: getattr(params, k) for k in fields}
     one = sweep_rate(table, 1)
     two = sweep_rate(table, 2)
+    trimmed = sweep_rate(table, 1, repeat=1, dask_default=True)
     best = 0.0
     for _ in range(2):
         t0 = time.perf_counter()
@@ -61,9 +83,13 @@ def measure(quick: bool = False) -> list:
                      'throughput (best of 2)', two, 'runs/s', better='higher',
             target=Target('>=', 1.8, text='>= 1.8x the 1-worker throughput', on='ratio'),
             comparisons=[Comparison('1 worker process', one)], fmt='.4g'),
-        Row('sweep', f'run_sweep on 2 workers against simulate_batch in this process '
-                     f'(2 threads), {what}: throughput', two, 'runs/s', better='higher',
-            comparisons=[Comparison('simulate_batch, in process, 2 threads', best)],
+        Row('sweep', f'run_sweep on 1 worker process, {what}: throughput', one, 'runs/s',
+            better='higher', comparisons=[Comparison(
+                "1 worker as Dask starts it by default (MALLOC_TRIM_THRESHOLD_=65536, which "
+                'rotrod sweep unsets)', trimmed)], fmt='.4g'),
+        Row('sweep', f'run_sweep on 2 workers against simulate_batch in this process, '
+                     f'{what}: throughput', two, 'runs/s', better='higher',
+            comparisons=[Comparison('simulate_batch, in process, 2 forked processes', best)],
             note=f'overhead {100 * (best / two - 1):.0f} % of the in-process time'
             if two < best else 'no overhead measured', fmt='.4g'),
     ]
