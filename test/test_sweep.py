@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import psutil
 import pytest
 
 from rotrod_core import Eq26Profile, NonFiniteStateError, RodParams, simulate_batch
@@ -135,6 +136,11 @@ def test_a_worker_killed_mid_sweep_does_not_lose_the_sweep():
     killed = {}
     with sweep.SweepClient(None, workers=2, processes=True) as client:
         pids = client.run(os.getpid)
+        # scheduler, nannies and workers listen on the loopback interface only
+        listening = [c.laddr.ip for proc in [psutil.Process(), *psutil.Process().children(
+            recursive=True)] for c in proc.net_connections('inet') if c.status == 'LISTEN']
+        assert listening and set(listening) == {'127.0.0.1'}
+        assert all(a.startswith('tcp://127.0.0.1:') for a in client.scheduler_info()['workers'])
 
         def on_chunk(chunk):
             if killed:
