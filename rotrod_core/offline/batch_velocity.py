@@ -350,7 +350,8 @@ class _Stored:
         self.Z, self.P = Z, P
 
     def r2(self):
-        return (self.Z * self.Z.conj()).real
+        """|z|^2 at every node, shape (n, nodes): one row per system."""
+        return np.ascontiguousarray(((self.Z * self.Z.conj()).real).T)
 
     def at(self, k, j):
         return self.Z[k, j], self.P[k, j]
@@ -367,6 +368,7 @@ class _Whirls:
         self.rot, self.omega = rot, omega               # e^(i theta_k), w(t_k)
 
     def r2(self):
+        """|z|^2 at every node, shape (n, nodes): one row per system."""
         return self._r2
 
     def at(self, k, j):
@@ -428,11 +430,11 @@ def run_exact(co: Coefficients, profile: Profile, nodes: np.ndarray, z0, p0):
     dZin = p0 + 1j * float(profile.omega(0.0)) * Zin
     A = np.empty((K + 1, n), complex)
     B = np.empty((K + 1, n), complex)
-    r2 = np.empty((K + 1, n))
+    r2 = np.empty((n, K + 1))
     A[0] = 0.5 * (Zin + dZin / (1j * w0))
     B[0] = 0.5 * (Zin - dZin / (1j * w0))
     C = A[0] + B[0] - rot[0] * re
-    r2[0] = C.real ** 2 + C.imag ** 2
+    r2[:, 0] = C.real ** 2 + C.imag ** 2
     # the panel sums of all steps, by few large matrix products (BLAS)
     Sm = np.empty((K, n), complex)
     Sp = np.empty((K, n), complex)
@@ -450,8 +452,7 @@ def run_exact(co: Coefficients, profile: Profile, nodes: np.ndarray, z0, p0):
             np.multiply(B[k + 1], back[g], out=B[k + 1])
         C = A[start + 1:stop + 1] + B[start + 1:stop + 1]
         C -= rot[start + 1:stop + 1, None] * re
-        np.multiply(C.real, C.real, out=r2[start + 1:stop + 1])
-        r2[start + 1:stop + 1] += C.imag ** 2
+        r2[:, start + 1:stop + 1] = (C.real ** 2 + C.imag ** 2).T
     return _Whirls(A, B, r2, w0, re, rot, profile.omega(nodes))
 
 
@@ -583,21 +584,21 @@ def _refine_peaks(kind, co, profile, nodes, traj):
     d|z|^2/dt whose states come from one exact step from the interval's first node.
     The result is never below the largest sample.
     """
-    r2 = traj.r2()
-    K1, n = r2.shape
+    r2 = traj.r2()                                      # (n, nodes)
+    n, K1 = r2.shape
     if K1 < 2:
-        return np.sqrt(r2[0]), np.full(n, nodes[0])
+        return np.sqrt(r2[:, 0]), np.full(n, nodes[0])
     scored = r2.copy()
-    scored[1:][r2[1:] < r2[:-1]] = -np.inf              # local maxima of the samples only
-    scored[:-1][r2[:-1] < r2[1:]] = -np.inf
+    scored[:, 1:][r2[:, 1:] < r2[:, :-1]] = -np.inf     # local maxima of the samples only
+    scored[:, :-1][r2[:, :-1] < r2[:, 1:]] = -np.inf
     cols = np.arange(n)
     cand, keep = [], []
     for _ in range(min(_PEAK_CANDIDATES, K1)):
-        k = np.argmax(scored, axis=0)
+        k = np.argmax(scored, axis=1)
         cand.append(k)
-        keep.append(np.isfinite(scored[k, cols]))
-        scored[k, cols] = -np.inf
-    best, best_t = r2[cand[0], cols], nodes[cand[0]]     # the largest sample
+        keep.append(np.isfinite(scored[cols, k]))
+        scored[cols, k] = -np.inf
+    best, best_t = r2[cols, cand[0]], nodes[cand[0]]     # the largest sample
     cand, keep = np.array(cand), np.array(keep)
     cols = np.broadcast_to(cols, cand.shape)
     k, j = cand[keep], cols[keep]
