@@ -11,6 +11,7 @@ the rows (bench/results.py).
 """
 
 import argparse
+import os
 import platform
 import sys
 import time
@@ -110,6 +111,34 @@ def measure(quick: bool = False) -> list:
     return rows
 
 
+class CpuShare:
+    """Wall time, this process's CPU time (its waited-for children included), and the
+    cores other processes kept busy meanwhile (from /proc/stat)."""
+
+    @staticmethod
+    def _busy():
+        try:
+            f = [int(x) for x in open('/proc/stat').readline().split()[1:]]
+        except (OSError, ValueError):
+            return float('nan')
+        return (f[0] + f[1] + f[2] + f[5] + f[6]) / os.sysconf('SC_CLK_TCK')
+
+    @staticmethod
+    def _own():
+        t = os.times()
+        return t.user + t.system + t.children_user + t.children_system
+
+    def __enter__(self):
+        self.t0, self.b0, self.c0 = time.perf_counter(), self._busy(), self._own()
+        return self
+
+    def __exit__(self, *exc):
+        self.wall = time.perf_counter() - self.t0
+        self.mine = self._own() - self.c0
+        self.others = max(0.0, self._busy() - self.b0 - self.mine) / self.wall
+        return False
+
+
 def eq26_rhs(w0sq, r0):
     """Eqs. 16/17 of an undamped round rod, hand-written (a reference independent of the code)."""
     def f(t, y):
@@ -157,10 +186,10 @@ def measure_batch(quick: bool = False) -> list:
     batch = monte_carlo_rods(n)
     timings = []
     for _ in range(3 if quick else 5):
-        t0 = time.perf_counter()
-        new = simulate_batch(batch, prof, 40.0, output_interval=0.1)
-        timings.append(time.perf_counter() - t0)
-    t_new = min(timings)
+        with CpuShare() as share:
+            new = simulate_batch(batch, prof, 40.0, output_interval=0.1)
+        timings.append((share.wall, share.mine, share.others))
+    t_new, cpu_new, others = min(timings)
     t0 = time.perf_counter()
     old = simulate_batch(batch, prof, 40.0, dt=1e-3, record_every=100, method='rk4')
     t_old = time.perf_counter() - t0
@@ -186,7 +215,8 @@ def measure_batch(quick: bool = False) -> list:
     rows.append(Row('core', f'simulate_batch (default: tolerance 1e-10 m), {tag}, '
                             'u, v every 0.1 s: time (best of 5)',
                     t_new, 's', target=target,
-                    note=f'{n / t_new:.0f} runs/s; ' + ', '.join(
+                    note=f'{n / t_new:.0f} runs/s; CPU time {cpu_new:.2f} s; other '
+                         f'processes used {others:.1f} of the 2 cores meanwhile; ' + ', '.join(
                         f'{k}: {v["systems"]} runs, {v["nodes"]} nodes'
                         for k, v in new.info['integrators'].items())
                     + (', quick run' if quick else ''),

@@ -42,6 +42,7 @@ import rotrod_core.offline.batch_velocity as velocity
 from rotrod_core.command.profiles import Profile
 from rotrod_core.model.equations import Coefficients, check_coupling, make_state
 from rotrod_core.model.params import RodParams
+from rotrod_core.numerics.blas import one_blas_thread
 from rotrod_core.numerics.checks import NonFiniteStateError, finite_number
 from rotrod_core.numerics.rk4 import rk4_step
 from rotrod_core.offline.simulate import _torque_function, time_grid
@@ -190,10 +191,11 @@ _FORKED_JOB = None      # what forked children of velocity_chunk read (set befor
 
 def _run_blocks(blocks):
     co, profile, the_plan, z0, p0, out = _FORKED_JOB
-    for b in blocks:
-        part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
-        for k, v in part.items():
-            out[k][b] = v
+    with one_blas_thread():
+        for b in blocks:
+            part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
+            for k, v in part.items():
+                out[k][b] = v
 
 
 def velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
@@ -209,12 +211,13 @@ def velocity_chunk(co, profile, the_plan, z0, p0, workers=1, block=BLOCK):
     blocks = [slice(i, min(i + block, n)) for i in range(0, n, block)]
     if workers <= 1 or len(blocks) < 2 or not _can_fork(None):
         out = {}
-        for b in blocks:
-            part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
-            for k, v in part.items():
-                if k not in out:
-                    out[k] = np.empty((n,) + v.shape[1:], v.dtype)
-                out[k][b] = v
+        with one_blas_thread():
+            for b in blocks:
+                part = velocity.run(velocity.subset(co, b), profile, the_plan, z0[b], p0[b])
+                for k, v in part.items():
+                    if k not in out:
+                        out[k] = np.empty((n,) + v.shape[1:], v.dtype)
+                    out[k][b] = v
         return out
     global _FORKED_JOB
     nout = 0 if the_plan.output_times is None else len(the_plan.output_times)
