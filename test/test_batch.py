@@ -16,8 +16,10 @@ from scipy.optimize import minimize_scalar
 from rotrod_core import (
     ConstantProfile,
     Eq26Profile,
+    RampProfile,
     RodParams,
     StepProfile,
+    TableProfile,
     simulate,
     simulate_batch,
 )
@@ -221,3 +223,20 @@ def test_torque_drive_is_rk4_only():
     b = simulate_batch(RodParams(hub_inertia=np.array([0.01, 0.02])), torque=0.0, t_end=1.0,
                        initial={'omega': 1.0})
     assert b.method == 'rk4' and b.info['dt_s'] == 1e-3
+
+
+@pytest.mark.parametrize('profile', [
+    RampProfile(omega_target=3.0, ramp_time=5.0, t_start=1.0),
+    TableProfile([0.0, 1.0, 2.5, 4.0, 6.0], [0.0, 1.0, 2.5, 2.0, 2.2]),
+])
+def test_profiles_with_kinks_step_on_their_breakpoints(profile):
+    # w' jumps at the ramp's ends, w'' at the table's times: nodes go there
+    assert set(profile.breakpoints()) <= set(
+        batch_velocity.mandatory_times(profile, 8.0, None).tolist())
+    p = RodParams(eccentricity=np.array([0.1, 0.2]), damping_ratio=np.array([0.0, 0.01]))
+    b = simulate_batch(p, profile, 8.0, output_interval=0.5)
+    for i in range(2):
+        one = simulate(p.item(i), profile, 8.0, dt=1e-3)
+        at = np.searchsorted(one.t, b.t - 1e-9)
+        assert np.max(np.abs(b.u[i] - one.u[at])) <= 1e-10
+        assert np.max(np.abs(b.v[i] - one.v[at])) <= 1e-10
