@@ -31,7 +31,7 @@ setup_venv() {
   "$(pick_python)" -m venv "$VENV"
   "$VENV/bin/python" -m pip install --quiet -c constraints.txt setuptools wheel
   "$VENV/bin/python" -m pip install --quiet --no-build-isolation -c constraints.txt \
-    -e ".[ros,viz,bag,dev]"
+    -e ".[ros,viz,bag,dev,sweep]"
   echo "$want" > "$stamp"
 }
 

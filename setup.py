@@ -40,6 +40,8 @@ setup(
         # rclpy and the standard messages from PyPI wheels (a ROS install provides them).
         'ros': ['ros-jazzy-rclpy[fastrtps]', 'ros-jazzy-common-interfaces'],
         'viz': ['rerun-sdk', 'matplotlib'],
+        # parameter sweeps on a Dask cluster and their Parquet files (docs/sweeps.md)
+        'sweep': ['dask[distributed]', 'pyarrow'],
         # rosbag2 (MCAP) files of offline runs: rotrod simulate --bag (no rclpy needed)
         'bag': ['rosbags'],
         # pytransform3d: the URDF's forward kinematics; mcap, mcap-ros2-support: an

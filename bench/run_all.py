@@ -6,15 +6,15 @@
     .venv/bin/python bench/run_all.py --quick --write # ... and written anyway
     .venv/bin/python bench/run_all.py --no-write      # full run, docs/performance.md untouched
 
-Runs bench_core.py, bench_estimator.py, bench_realtime.py and bench_fleet.py one after
-the other, each as its own process writing its rows as JSON (bench/results.py); their
-own tables go to stderr. The combined table, stamped with the date, the machine, the
-load average at start, the code measured and this command, goes to stdout and replaces
-what lies between ``<!-- bench:begin -->`` and ``<!-- bench:end -->`` in
-docs/performance.md; nothing outside the markers is touched. A bench that fails, or a
-row with a missing value, stops the run before docs/performance.md is written. Exit
-status: 0 when every target is met, 1 when some target is not (docs/performance.md is
-still written), 2 on an error.
+Runs bench_core.py, bench_sweep.py, bench_estimator.py, bench_realtime.py and
+bench_fleet.py one after the other, each as its own process writing its rows as JSON
+(bench/results.py); their own tables go to stderr. The combined table, stamped with the
+date, the machine, the load average at start, the code measured and this command, goes
+to stdout and replaces what lies between ``<!-- bench:begin -->`` and ``<!-- bench:end
+-->`` in docs/performance.md; nothing outside the markers is touched. A bench that
+fails, or a row with a missing value, stops the run before docs/performance.md is
+written. Exit status: 0 when every target is met, 1 when some target is not
+(docs/performance.md is still written), 2 on an error.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ import results  # noqa: E402  (bench/results.py)
 
 BEGIN = '<!-- bench:begin -->'
 END = '<!-- bench:end -->'
-PACKAGES = ('numpy', 'scipy', 'rerun-sdk', 'rclpy')
+PACKAGES = ('numpy', 'scipy', 'rerun-sdk', 'rclpy', 'dask', 'distributed', 'pyarrow')
 STAMP_KEYS = ('date', 'command', 'run time', 'machine', 'OS', 'Python', 'packages',
               'load average at start', 'code')
 
@@ -276,6 +276,7 @@ def main(argv: list | None = None) -> int:
         rewrite(args.page.read_text(), '')      # markers checked before an hour's work
     rows, notes, loads = [], [], []
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
+               ('bench_sweep.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
                ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600),
                ('bench_fleet.py', ['--duration', f'{duration:g}',

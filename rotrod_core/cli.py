@@ -10,6 +10,7 @@ rotrod urdf --params-file config/table1.yaml -o rotrod.urdf
 rotrod demo
 rotrod reproduce --out out/reproduce
 rotrod analyze --out out/analyze --only campbell coupling
+rotrod sweep --grid eccentricity=0.0:0.2:5 damping_ratio=0,0.01 -o sweep.parquet
 """
 
 from __future__ import annotations
@@ -305,6 +306,56 @@ def cmd_analyze(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    """Run a parameter sweep on Dask and write its per-run summary to Parquet."""
+    from rotrod_core.offline.sweep import SweepClient, grid_table, read_table, run_sweep
+    from rotrod_core.reporting.output import ProgressBar
+    from rotrod_core.reporting.sweep_file import SweepParquetWriter
+    if (args.grid is None) == (args.sets is None):
+        raise ValueError('give --grid NAME=... or --sets FILE.csv (one of them)')
+    table = grid_table(args.grid) if args.grid else read_table(args.sets)
+    base = _params(args)
+    profile = _profile(args)
+    runs = len(next(iter(table.values())))
+    where = args.scheduler or f'a local cluster of {args.workers or "one worker per core"} ' \
+        'process(es) on 127.0.0.1'
+    print(f'rotrod sweep: {runs} runs of {args.t_end:g} s ({args.profile} profile), chunks '
+          f'of {args.chunk_size}, tolerance {args.tolerance:g} m, on {where}', file=sys.stderr)
+    meta = {'command': ' '.join(['rotrod', 'sweep', *sys.argv[2:]]) if args.argv is None
+            else ' '.join(['rotrod', *args.argv]), 'profile': repr(profile),
+            't_end_s': args.t_end, 'tolerance_m': args.tolerance,
+            'base_parameters': base._numeric(), 'section': base.section}
+    bar = ProgressBar('sweep', runs)
+    with SweepParquetWriter(args.output, meta) as writer:
+        def on_chunk(chunk):
+            writer.write(chunk)
+            bar.update(len(chunk.index), sum(s != 'ok' for s in chunk.status))
+        with SweepClient(args.scheduler, args.workers) as client:
+            summary = run_sweep(table, profile, args.t_end, base=base,
+                                tolerance=args.tolerance, client=client,
+                                chunk_size=args.chunk_size, on_chunk=on_chunk)
+    print(f'wrote {args.output}: {summary.runs} rows, {summary.ok} with results, '
+          f'{len(summary.problems)} without, in {summary.elapsed:.1f} s '
+          f'({summary.runs / max(summary.elapsed, 1e-9):.0f} runs/s)')
+    for index, values, status in summary.problems[:20]:
+        shown = ', '.join(f'{k}={v:g}' for k, v in values.items())
+        print(f'  run {index} ({shown}): {status}', file=sys.stderr)
+    if len(summary.problems) > 20:
+        print(f'  ... and {len(summary.problems) - 20} more (status column of the file)',
+              file=sys.stderr)
+    return 0 if not summary.problems else 1
+
+
+def _positive_int(text: str) -> int:
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a whole number: {text!r}') from None
+    if x < 1:
+        raise argparse.ArgumentTypeError(f'must be >= 1: {text!r}')
+    return x
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``rotrod`` command."""
     parser = argparse.ArgumentParser(prog='rotrod', description=__doc__.split('\n')[0],
@@ -412,6 +463,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--only', nargs='+', choices=('campbell', 'critical-map', 'coupling'),
                    help='run only these analyses (default: all)')
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser('sweep', help='many runs over a parameter grid or table, on Dask, to '
+                                     'Parquet (docs/sweeps.md)',
+                       description='Velocity-drive runs from rest over a grid or a CSV of '
+                                   'parameter sets; the per-run summary goes to Parquet as '
+                                   'chunks finish. Exit status 1 if some sets have no result '
+                                   '(invalid parameters or a failed chunk: listed, and in the '
+                                   'status column).')
+    _add_params(p)
+    _add_profile(p)
+    g = p.add_mutually_exclusive_group()
+    g.add_argument('--grid', nargs='+', metavar='NAME=SPEC',
+                   help='axes of a grid: NAME=START:STOP:COUNT (COUNT values, ends '
+                        'included) or NAME=V1,V2,...; NAME a parameter above (e.g. '
+                        'eccentricity, damping_ratio)')
+    g.add_argument('--sets', type=Path, metavar='FILE.csv',
+                   help='parameter sets: a header of parameter names, one row per run')
+    p.add_argument('--t-end', type=_finite, default=40.0, help='duration [s] (default 40)')
+    p.add_argument('--tolerance', type=_finite, default=1e-10,
+                   help='accuracy of u, v along each run [m] (default 1e-10)')
+    p.add_argument('--scheduler', metavar='ADDRESS', default=None,
+                   help='a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a '
+                        'local cluster on 127.0.0.1, started and stopped here)')
+    p.add_argument('--workers', type=_positive_int, default=None,
+                   help='worker processes of the local cluster (default: one per core)')
+    p.add_argument('--chunk-size', type=_positive_int, default=1024,
+                   help='parameter sets per task (default 1024)')
+    p.add_argument('-o', '--output', type=Path, required=True, help='FILE.parquet')
+    p.set_defaults(func=cmd_sweep, argv=None)
     return parser
 
 
@@ -419,6 +499,8 @@ def main(argv=None) -> int:
     """Entry point of the ``rotrod`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if argv is not None and hasattr(args, 'argv'):
+        args.argv = list(argv)
     try:
         return args.func(args)
     except (ValueError, OSError) as exc:

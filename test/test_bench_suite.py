@@ -162,10 +162,11 @@ def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys)
 
     assert run_all.main(['--quick', '--page', str(readme)]) == 1   # a target not met
     assert readme.read_text() == original                            # --quick: not written
-    assert [c[0] for c in calls] == ['bench_core.py', 'bench_estimator.py',
+    assert [c[0] for c in calls] == ['bench_core.py', 'bench_sweep.py', 'bench_estimator.py',
                                      'bench_realtime.py', 'bench_fleet.py']
-    assert calls[0][1] == ['--quick'] and calls[2][1] == ['--duration', '5']
-    assert calls[3][1] == ['--duration', '5', '--rods', '3']
+    assert calls[0][1] == ['--quick'] and calls[1][1] == ['--quick']
+    assert calls[3][1] == ['--duration', '5']
+    assert calls[4][1] == ['--duration', '5', '--rods', '3']
 
     assert run_all.main(['--quick', '--write', '--page', str(readme)]) == 1
     new = readme.read_text()

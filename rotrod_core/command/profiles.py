@@ -73,6 +73,17 @@ class Profile:
         """Instants where w jumps, as ``(time s, w before, w after)`` triples (t > 0)."""
         return ()
 
+    def breakpoints(self) -> tuple:
+        """Instants t > 0 where w or one of its first derivatives is not smooth, s.
+
+        Integrators that take large steps put a node on each (a step across one would
+        lose its order). By default the jumps and :attr:`end_time`.
+        """
+        times = {float(j[0]) for j in self.jumps()}
+        if self.end_time:
+            times.add(float(self.end_time))
+        return tuple(sorted(t for t in times if t > 0))
+
     def omega(self, t):
         """Angular velocity w(t), rad/s."""
         raise NotImplementedError
@@ -172,6 +183,11 @@ class Eq26Profile(Profile):
     def end_time(self) -> float:
         """7T/3, s."""
         return 7.0 * self.period / 3.0
+
+    def breakpoints(self) -> tuple:
+        """The joints T, 4T/3 and 7T/3 (the third derivative of w jumps there), s."""
+        T = self.period
+        return (T, 4.0 * T / 3.0, 7.0 * T / 3.0)
 
     def with_peak(self, omega_peak: float) -> Eq26Profile:
         """Same timing, peak |w| ``omega_peak`` rad/s (same sense of rotation)."""
@@ -351,6 +367,10 @@ class RampProfile(Profile):
     def end_time(self) -> float:
         """End of the ramp, s."""
         return self.t_start + self.ramp_time
+
+    def breakpoints(self) -> tuple:
+        """Start and end of the ramp (the acceleration jumps there), s."""
+        return tuple(t for t in (self.t_start, self.end_time) if t > 0)
 
     def with_peak(self, omega_peak: float) -> RampProfile:
         """Same timing, final |w| ``omega_peak`` (same sense of rotation)."""
@@ -553,6 +573,10 @@ class TableProfile(Profile):
         """Last table time, s."""
         return float(self.times[-1])
 
+    def breakpoints(self) -> tuple:
+        """The table's times (PCHIP's second derivative jumps there), s."""
+        return tuple(float(t) for t in self.times if t > 0)
+
     def with_peak(self, omega_peak: float) -> TableProfile:
         """Omegas scaled so the largest |w| is ``omega_peak``."""
         omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
@@ -697,6 +721,10 @@ class SpinUpProfile(Profile):
     def end_time(self) -> float:
         """``duration``, s."""
         return self.duration
+
+    def breakpoints(self) -> tuple:
+        """The spline's knots in time (its third derivative jumps there), s."""
+        return tuple(float(x) * self.duration for x in np.unique(self._w.t) if x > 0)
 
     def with_peak(self, omega_peak: float) -> SpinUpProfile:
         """Control points scaled so the peak |w| is ``omega_peak``.

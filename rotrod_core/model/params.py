@@ -58,6 +58,7 @@ DEFAULT_HUB_INERTIA = disk_inertia(DEFAULT_HUB_RADIUS, DEFAULT_HUB_THICKNESS)
 SECTIONS = ('circular', 'rectangular')
 
 
+
 @dataclass(frozen=True)
 class FieldInfo:
     """What a :class:`RodParams` field is: its unit, description and range, defined once.
@@ -535,3 +536,5 @@ class RodParams:
 FIELDS = tuple(FieldInfo(f.name, f.default, **f.metadata[_INFO])
                for f in dataclasses.fields(RodParams))
 """Every RodParams field's :class:`FieldInfo`, in the dataclass's order."""
+FIELD_UNITS = {f.name: f.unit for f in FIELDS if not f.choices}
+"""The numeric fields of :class:`RodParams` and their SI units ('-': dimensionless)."""

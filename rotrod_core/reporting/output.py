@@ -1,7 +1,8 @@
-"""Output directory checks and progress lines for the long commands (reproduce, analyze)."""
+"""Output directory checks and progress lines for the long commands (reproduce, analyze, sweep)."""
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import tempfile
@@ -77,3 +78,46 @@ class Progress:
     def finish(self, text: str) -> None:
         """The closing line, with the total elapsed time."""
         self._print(f'[{self.name}] {text} ({time.perf_counter() - self.started:.1f} s)')
+
+
+class ProgressBar:
+    """A one-line progress bar on a stream (stderr by default): runs done, rate, time left.
+
+    On a terminal the line is redrawn in place; otherwise a line is printed at most
+    every ``min_interval`` seconds, and at the end.
+    """
+
+    def __init__(self, name: str, total: int, stream=None, width: int = 30,
+                 min_interval: float = 2.0):
+        self.name, self.total, self.width = name, max(0, int(total)), width
+        self.stream = sys.stderr if stream is None else stream
+        self.min_interval = min_interval
+        self.tty = bool(getattr(self.stream, 'isatty', lambda: False)())
+        self.started = time.perf_counter()
+        self._last = -math.inf
+        self.done = self.problems = 0
+
+    def line(self) -> str:
+        """The bar's text for the current counts."""
+        elapsed = time.perf_counter() - self.started
+        frac = self.done / self.total if self.total else 1.0
+        filled = int(round(self.width * frac))
+        rate = self.done / elapsed if elapsed > 0 else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else math.inf
+        eta = f'{left:.0f} s left' if math.isfinite(left) else 'time left unknown'
+        bad = f', {self.problems} without result' if self.problems else ''
+        return (f'[{self.name}] |{"#" * filled}{"." * (self.width - filled)}| '
+                f'{100 * frac:5.1f} % {self.done}/{self.total} runs, {rate:.0f} runs/s, '
+                f'{eta}{bad}')
+
+    def update(self, done: int, problems: int = 0) -> None:
+        """Add ``done`` finished runs (``problems`` of them without a result)."""
+        self.done += done
+        self.problems += problems
+        now = time.perf_counter()
+        last = self.done >= self.total
+        if self.tty:
+            print('\r' + self.line(), end='\n' if last else '', file=self.stream, flush=True)
+        elif last or now - self._last >= self.min_interval:
+            self._last = now
+            print(self.line(), file=self.stream, flush=True)
