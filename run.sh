@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # rotrod's two entry points for a fresh machine (see README):
 #   ./run.sh demo [options]       set up .venv if needed, then run the main job
-#   ./run.sh test [pytest args]   set up .venv if needed, then lint and run the tests
+#   ./run.sh test [pytest args]   set up .venv if needed, then lint, type-check and run the tests
 # The virtual environment is created on first use and reused while constraints.txt
 # and setup.py are unchanged. Everything comes from PyPI with exact pins.
 set -euo pipefail
@@ -47,6 +47,8 @@ case "$cmd" in
     export PATH="$VENV/bin:$PATH"
     echo "== ruff (lint, style, docstrings)" >&2
     "$VENV/bin/ruff" check .
+    echo "== mypy (types; settings in pyproject.toml)" >&2
+    "$VENV/bin/mypy"
     echo "== pytest" >&2
     # Tests that start ROS nodes keep DDS on this machine: a private network
     # namespace where the kernel permits it (see test/ros_harness.py).

@@ -46,7 +46,7 @@ setup(
         'bag': ['rosbags'],
         # pytransform3d: the URDF's forward kinematics; mcap, mcap-ros2-support: an
         # independent reader of the bags (test/test_urdf.py, test/test_bag.py)
-        'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff',
+        'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff', 'mypy',
                 'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py',
                 'pytransform3d', 'mcap', 'mcap-ros2-support'],
     },
