@@ -24,10 +24,11 @@ from rotrod_core.analysis.critical import STARTS, critical_speed, critical_speed
 from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
 from rotrod_core.analysis.stages import format_stage_table, stage_extremes
 from rotrod_core.command.planner import plan_spin_up
-from rotrod_core.command.profiles import (
+from rotrod_core.command.profiles import Eq26Profile
+from rotrod_core.command.registry import (
     OPTION_PROFILES,
     PROFILE_OPTIONS,
-    Eq26Profile,
+    describe,
     profile_from_options,
 )
 from rotrod_core.model.equations import COUPLINGS
@@ -81,13 +82,18 @@ def _add_profile(p: argparse.ArgumentParser) -> None:
             g.add_argument('--table', '--table-file', dest='table_file', type=Path,
                            help=o.description)
             continue
-        g.add_argument(*flags, dest=o.name, type=_finite, default=None, metavar=o.unit or 'X',
+        g.add_argument(*flags, dest=o.name, type=_finite, default=None,
+                       metavar=o.unit if o.unit not in ('', '1') else 'X',
                        help=f'{o.description} [{o.unit}] (default {o.default:g})')
 
 
+def _profile_options(args) -> dict:
+    return {o.name: getattr(args, o.name) for o in PROFILE_OPTIONS}
+
+
 def _profile(args):
-    return profile_from_options(args.profile, {o.name: getattr(args, o.name)
-                                               for o in PROFILE_OPTIONS})
+    """The --profile of the arguments; a planned one is planned for the rod's options."""
+    return profile_from_options(args.profile, _profile_options(args), _params(args))
 
 
 def _initial(args) -> dict:
@@ -111,7 +117,10 @@ def cmd_simulate(args) -> int:
     if args.drive == 'velocity':
         if args.torque is not None:
             raise ValueError('--torque applies to --drive torque')
-        run = simulate(params, _profile(args), args.t_end, dt=args.dt, coupling=args.coupling,
+        profile = _profile(args)
+        for line in describe(profile, _profile_options(args))[:1]:    # what was planned
+            print(line)
+        run = simulate(params, profile, args.t_end, dt=args.dt, coupling=args.coupling,
                        initial=initial)
     else:
         if args.torque is None:
