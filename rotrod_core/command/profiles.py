@@ -665,8 +665,11 @@ class SpinUpProfile(Profile):
 
     @_evaluation
     def omega(self, t):
-        """Angular velocity, rad/s."""
-        return _out(t, self._w(self._x(t)))
+        """Angular velocity, rad/s: exactly the end speeds outside the change."""
+        x = self._x(t)
+        w = np.where(x <= 0.0, self.omega_start,
+                     np.where(x >= 1.0, self.omega_target, self._w(x)))
+        return _out(t, w)
 
     @_evaluation
     def omega_dot(self, t):
