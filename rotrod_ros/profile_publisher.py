@@ -13,7 +13,11 @@ the last value) is set.
 Profiles (rotrod_core.command.profiles): eq26 (period, omega_target: docs/model.md's Eq. 26),
 constant (omega_target), step (omega_start -> omega_target at t_step), ramp (0 -> omega_target
 over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
-f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).
+f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s),
+planned (the fastest vibration-free spin-up omega_start -> omega_target under
+deflection_limit, residual, robust and max_angular_acceleration, planned for the rod
+given by the same rod parameters as the simulator's; it logs what it planned and what
+the simulator must allow, and by default streams the final speed 1 s past the plan).
 """
 
 from __future__ import annotations
@@ -30,15 +34,18 @@ from rclpy.node import Node
 from std_msgs.msg import Float64
 
 import rotrod_core.live.scheduling as scheduling
-from rotrod_core.command.profiles import (
+from rotrod_core.command.profiles import Profile
+from rotrod_core.command.registry import (
     OPTION_PROFILES,
     PROFILE_OPTIONS,
-    Profile,
+    describe,
     profile_from_options,
+    stream_duration,
 )
 
 from . import node_main
 from .node_main import ConfigurationError
+from .parameters import ROD_SPECS, rod_params
 
 NODE_NAME = 'rotrod_profile_publisher'
 QOS_DEPTH = 1000
@@ -58,6 +65,8 @@ PARAMETERS = (
     ('profile', 'eq26', ' | '.join(OPTION_PROFILES), None),
     *((o.name, o.default, f'{o.description}' + (f', {o.unit}' if o.unit else ''),
        None if o.low is None else (o.low, o.high)) for o in PROFILE_OPTIONS),
+    *((s.name, s.default, f'planned: the rod planned for (as the simulator\'s): '
+       f'{s.description}', None if s.low is None else (s.low, s.high)) for s in ROD_SPECS),
     ('rate', 100.0, 'publishing rate, Hz of the node clock', (0.0, 1e5)),
     ('duration', 0.0, 'how long to stream, s of the node clock; 0 = to the profile\'s end',
      (0.0, 1e9)),
@@ -71,7 +80,8 @@ PARAMETERS = (
 
 def make_profile(values: dict) -> Profile:
     """The profile described by the parameter values (raises ValueError with the reason)."""
-    return profile_from_options(values['profile'], values)
+    params = rod_params(values) if values['profile'] == 'planned' else None
+    return profile_from_options(values['profile'], values, params)
 
 
 class ProfilePublisher(Node):
@@ -96,10 +106,12 @@ class ProfilePublisher(Node):
             self.profile = make_profile(values)
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
+        for line in describe(self.profile, values):
+            self.get_logger().info(line)
         if not values['rate'] > 0:
             raise ConfigurationError(f'rate must be > 0 Hz, got {values["rate"]!r}')
         self.rate = values['rate']
-        self.duration = values['duration'] or (self.profile.end_time or 0.0)
+        self.duration = values['duration'] or stream_duration(self.profile)
         self.loop, self.hold = values['loop'], values['hold']
         self.realtime_priority = values['realtime_priority']
         self.name = values['profile']

@@ -81,10 +81,15 @@ def test_a_rectangular_section_is_built_from_its_two_sizes():
 
 def test_table1_file_holds_the_papers_parameters_and_known_names():
     doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
-    (key, body), = doc.items()
-    assert key == '/**/rotrod_simulator'
-    values = body['ros__parameters']
+    # the simulator's own section first: rclpy applies node keys in the order they first
+    # appear, and a command-line -p (a "/**" key) must override both
+    assert list(doc) == ['/**/rotrod_simulator', '/**']
+    shared = doc['/**']['ros__parameters']
+    values = {**doc['/**/rotrod_simulator']['ros__parameters'], **shared}
     assert set(values) <= set(SPECS_BY_NAME)
+    # what every node takes alike: the rod, the criterion and the acceleration bound
+    assert set(shared) == {s.name for s in ROD_SPECS if s.name in shared} | {
+        'deflection_limit', 'max_angular_acceleration'}
     assert (values['mass'], values['rod_length'], values['rod_diameter'],
             values['youngs_modulus'], values['eccentricity']) == (M, L, D, E, R0)
     assert values['deflection_limit'] == 0.003          # the paper's 3.0 mm
