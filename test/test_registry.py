@@ -4,6 +4,7 @@ acceleration contract with the simulator."""
 
 import inspect
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +25,8 @@ from rotrod_core.command.registry import (
     stream_duration,
 )
 from rotrod_core.live.engine import EngineConfig
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope='module')
@@ -163,3 +166,17 @@ def test_a_plan_is_exactly_at_its_end_speeds_outside_the_change():
     t = np.array([0.0, plan.t_start, plan.end_time, plan.end_time + 7.3])
     assert list(plan.omega(t)) == [0.0, 0.0, 2.0, 2.0]
     assert list(plan.omega_dot(t[[0, 3]])) == [0.0, 0.0]
+
+
+def test_the_reports_planned_row_is_config_planned_yaml():
+    """docs/reproduce.md's robust row plans what config/planned.yaml streams."""
+    import yaml
+
+    from rotrod_core.reporting.spin_ups import PLANNED
+    doc = yaml.safe_load((ROOT / 'config' / 'planned.yaml').read_text())
+    streamed = {**doc['/**']['ros__parameters'],
+                **doc['/**/rotrod_profile_publisher']['ros__parameters']}
+    assert streamed.pop('profile') == 'planned'
+    label, options = PLANNED[-1]
+    assert 'config/planned.yaml' in label
+    assert registry.options_with_defaults(streamed) == registry.options_with_defaults(options)
