@@ -210,17 +210,28 @@ def cmd_demo(args) -> int:
     if not args.offline:
         # the nodes' orchestration lives with the nodes (rotrod_ros), which sit above the
         # core: it runs as a process of its own, so the core imports nothing of them
-        command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output)]
+        command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output),
+                   '--profile', args.profile]
         if args.speed is not None:
             command += ['--speed', repr(args.speed)]
         if args.real_time:
             command.append('--real-time')
         return subprocess.call(command)
     params = RodParams()
-    profile = Eq26Profile(period=15.0, omega_target=2.0)
-    run = simulate(params, profile, 40.0, dt=1e-3)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.profile == 'planned':
+        from rotrod_core.reporting.spin_ups import PLANNED
+        label, options = PLANNED[-1]
+        profile = profile_from_options('planned', options, params)
+        run = simulate(params, profile, profile.end_time + 5.0, dt=1e-3)
+        path = run.save(out / 'planned_run.csv')
+        print(f'rotrod demo: {label}, Table 1, offline core run')
+        print(describe(profile, options)[0])
+        print(f'time history: {path}')
+        return 0
+    profile = Eq26Profile(period=15.0, omega_target=2.0)
+    run = simulate(params, profile, 40.0, dt=1e-3)
     path = run.save(out / 'eq26_run.csv')
     print('rotrod demo: the paper\'s spin-up scenario (Eq. 26, Table 1), offline core run')
     print(format_stage_table(stage_extremes(run, profile.period)))
@@ -320,8 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help='FILE.csv (the figure goes beside it as FILE.png)')
     p.set_defaults(func=cmd_plan)
 
-    p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
-                                    'to a Rerun recording, with a stage summary')
+    p = sub.add_parser('demo', help="the paper's spin-up scenario (or the planned one) "
+                                    'through the ROS nodes, to a Rerun recording, with a '
+                                    'summary')
     p.add_argument('-o', '--output', default='out/rotrod.rrd',
                    help='Rerun recording to write (default out/rotrod.rrd)')
     p.add_argument('--speed', type=_finite, default=None,
@@ -330,6 +342,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help='run at wall-clock speed (no /clock)')
     p.add_argument('--offline', action='store_true',
                    help='no ROS: run the scenario in rotrod_core only (CSV in --out)')
+    p.add_argument('--profile', choices=('eq26', 'planned'), default='eq26',
+                   help="eq26: the paper's Eq. 26 (default); planned: the planned spin-up "
+                        'of config/planned.yaml (docs/planner.md)')
     p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
 

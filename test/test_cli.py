@@ -166,3 +166,11 @@ def test_simulate_planned_arrives_without_whirl_under_its_bounds(tmp_path, capsy
     coef, *_ = np.linalg.lstsq(basis, z, rcond=None)
     assert np.max(np.abs(z - basis @ coef)) < 1e-9          # nothing but the two whirls
     assert abs(coef[0]) + abs(coef[1]) <= 2.5e-7
+
+
+def test_offline_demo_of_the_planned_spin_up(tmp_path, capsys):
+    assert main(['demo', '--offline', '--profile', 'planned', '--out', str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert 'config/planned.yaml' in out and 'duration' in out
+    data = np.loadtxt(tmp_path / 'planned_run.csv', delimiter=',', skiprows=1)
+    assert data[0, 6] == 0.0 and data[-1, 6] == 2.0

@@ -166,3 +166,27 @@ def test_a_running_planned_publisher_keeps_its_plan_when_set_a_bad_value(
     ros_node.spin_until(lambda: len(got) > 320, 30, 'the lead and the start of the change')
     w = [m.data for m in got]
     assert w[:300] == [0.0] * 300 and 0.0 < w[320] < 2.0
+
+
+def test_the_demo_streams_the_planned_spin_up_and_compares_it_offline(tmp_path):
+    """``rotrod demo --profile planned``: the plan of config/planned.yaml through the
+    three nodes; the recorded whirl after arrival is the plan's (within 10x its
+    prediction) and below Eq. 26's, the peak under 3 mm."""
+    import subprocess
+
+    from rotrod_ros.install import executable
+    out = tmp_path / 'demo' / 'rotrod.rrd'
+    run = subprocess.run([*executable('rotrod'), 'demo', '--profile', 'planned', '-o',
+                          str(out)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    text = run.stdout
+    assert 'the planned spin-up of config/planned.yaml' in text and out.is_file()
+    whirl, offline = (float(x) for x in
+                      re.search(r'whirl after arrival \[um\] +([0-9.]+) +([0-9.]+)', text)
+                      .groups())
+    predicted = float(re.search(r'the plan predicts ([0-9.]+) um', text).group(1))
+    eq26 = float(re.search(r'Eq. 26 leaves ([0-9.]+) um', text).group(1))
+    peak = float(re.search(r'peak deflection \[mm\] +([0-9.]+)', text).group(1))
+    assert offline == pytest.approx(predicted, abs=2e-3)
+    assert whirl <= 10 * predicted and whirl < eq26
+    assert 1e3 * static_deflection(2.0) <= peak < 1e3 * LIMIT
