@@ -30,10 +30,10 @@ from rotrod_core import (  # noqa: E402
     Eq26Profile,
     RodParams,
     plan_spin_up,
-    planner,
     simulate,
     whirl_residual,
 )
+from rotrod_core.command import planner  # noqa: E402
 
 P = RodParams()
 CASES = (('nominal', {}, 1.5, 2.5e-7), ('robust 0.1', {'robust': 0.1, 'residual': 1e-6}, 4.0,

@@ -27,10 +27,11 @@ from rotrod_core.analysis.critical import STARTS, critical_speed, critical_speed
 from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
 from rotrod_core.analysis.stages import format_stage_table, stage_extremes
 from rotrod_core.command.planner import plan_spin_up
-from rotrod_core.command.profiles import (
+from rotrod_core.command.profiles import Eq26Profile
+from rotrod_core.command.registry import (
     OPTION_PROFILES,
     PROFILE_OPTIONS,
-    Eq26Profile,
+    describe,
     profile_from_options,
 )
 from rotrod_core.model.equations import COUPLINGS
@@ -86,13 +87,18 @@ def _add_profile(p: argparse.ArgumentParser) -> None:
             g.add_argument('--table', '--table-file', dest='table_file', type=Path,
                            help=o.description)
             continue
-        g.add_argument(*flags, dest=o.name, type=_finite, default=None, metavar=o.unit or 'X',
+        g.add_argument(*flags, dest=o.name, type=_finite, default=None,
+                       metavar=o.unit if o.unit not in ('', '1') else 'X',
                        help=f'{o.description} [{o.unit}] (default {o.default:g})')
 
 
+def _profile_options(args) -> dict:
+    return {o.name: getattr(args, o.name) for o in PROFILE_OPTIONS}
+
+
 def _profile(args):
-    return profile_from_options(args.profile, {o.name: getattr(args, o.name)
-                                               for o in PROFILE_OPTIONS})
+    """The --profile of the arguments; a planned one is planned for the rod's options."""
+    return profile_from_options(args.profile, _profile_options(args), _params(args))
 
 
 def _initial(args) -> dict:
@@ -126,7 +132,10 @@ def cmd_simulate(args) -> int:
     if args.drive == 'velocity':
         if args.torque is not None:
             raise ValueError('--torque applies to --drive torque')
-        run = simulate(params, _profile(args), args.t_end, dt=args.dt, coupling=args.coupling,
+        profile = _profile(args)
+        for line in describe(profile, _profile_options(args))[:1]:    # what was planned
+            print(line)
+        run = simulate(params, profile, args.t_end, dt=args.dt, coupling=args.coupling,
                        initial=initial)
     else:
         if args.torque is None:
@@ -252,17 +261,28 @@ def cmd_demo(args) -> int:
     if not args.offline:
         # the nodes' orchestration lives with the nodes (rotrod_ros), which sit above the
         # core: it runs as a process of its own, so the core imports nothing of them
-        command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output)]
+        command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output),
+                   '--profile', args.profile]
         if args.speed is not None:
             command += ['--speed', repr(args.speed)]
         if args.real_time:
             command.append('--real-time')
         return subprocess.call(command)
     params = RodParams()
-    profile = Eq26Profile(period=15.0, omega_target=2.0)
-    run = simulate(params, profile, 40.0, dt=1e-3)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.profile == 'planned':
+        from rotrod_core.reporting.spin_ups import PLANNED
+        label, options = PLANNED[-1]
+        profile = profile_from_options('planned', options, params)
+        run = simulate(params, profile, profile.end_time + 5.0, dt=1e-3)
+        path = run.save(out / 'planned_run.csv')
+        print(f'rotrod demo: {label}, Table 1, offline core run')
+        print(describe(profile, options)[0])
+        print(f'time history: {path}')
+        return 0
+    profile = Eq26Profile(period=15.0, omega_target=2.0)
+    run = simulate(params, profile, 40.0, dt=1e-3)
     path = run.save(out / 'eq26_run.csv')
     print('rotrod demo: the paper\'s spin-up scenario (Eq. 26, Table 1), offline core run')
     print(format_stage_table(stage_extremes(run, profile.period)))
@@ -435,8 +455,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('-o', '--output', type=Path, help='FILE.urdf (default: stdout)')
     p.set_defaults(func=cmd_urdf)
 
-    p = sub.add_parser('demo', help="the paper's spin-up scenario through the ROS nodes, "
-                                    'to a Rerun recording, with a stage summary')
+    p = sub.add_parser('demo', help="the paper's spin-up scenario (or the planned one) "
+                                    'through the ROS nodes, to a Rerun recording, with a '
+                                    'summary')
     p.add_argument('-o', '--output', default='out/rotrod.rrd',
                    help='Rerun recording to write (default out/rotrod.rrd)')
     p.add_argument('--speed', type=_finite, default=None,
@@ -445,6 +466,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help='run at wall-clock speed (no /clock)')
     p.add_argument('--offline', action='store_true',
                    help='no ROS: run the scenario in rotrod_core only (CSV in --out)')
+    p.add_argument('--profile', choices=('eq26', 'planned'), default='eq26',
+                   help="eq26: the paper's Eq. 26 (default); planned: the planned spin-up "
+                        'of config/planned.yaml (docs/planner.md)')
     p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
 

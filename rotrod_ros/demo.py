@@ -7,6 +7,11 @@ profile to end, stops the logger (which closes the recording) and the simulator,
 reads the recording back and prints, per stage, the extreme u and v beside the
 offline ``simulate`` run of the same profile.
 
+``--profile planned`` streams the planned spin-up of config/planned.yaml instead
+(added after the other files, for every node) and holds 2 rad/s for HOLD s after it;
+it prints the arrival, the peak deflection and the whirl left after arrival, recorded
+beside the offline run of the plan the profile publisher made from the same files.
+
 DDS stays on this machine unless the caller set otherwise
 (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; a ROS_DOMAIN_ID is chosen if none is set).
 """
@@ -24,18 +29,30 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
-from rotrod_core import RodParams, simulate
+from rotrod_core import RodParams, simulate, whirl_residual
 from rotrod_core.analysis.alignment import profile_delay
+from rotrod_core.analysis.modes import static_deflection
 from rotrod_core.analysis.stages import format_stage_table, series_stage_extremes
+from rotrod_core.command.planner import fitted_whirl_residual
 from rotrod_core.command.profiles import Eq26Profile
+from rotrod_core.command.registry import describe, profile_from_options
 from rotrod_core.reporting import recording
 
 from .install import executable, share_file
+from .parameters import defaults, rod_params
 
 EXECUTABLES = ('simulator', 'rerun_logger', 'profile_publisher')
 PARAM_FILES = ('config/table1.yaml', 'config/demo.yaml')
 """Parameter files of every node, in order (later ones override)."""
+PLANNED_FILE = 'config/planned.yaml'
+"""Added after PARAM_FILES for ``--profile planned``."""
+PROFILES = ('eq26', 'planned')
+HOLD = 5.0
+"""Simulated time streamed at the target speed after a planned spin-up, s."""
+SETTLE = 0.5
+"""Time after a plan's arrival before its whirl is measured, s (the stream's delay)."""
 
 
 class DemoError(RuntimeError):
@@ -50,15 +67,40 @@ def ros_environment(env: dict) -> dict:
     return env
 
 
-def node_commands(output: Path, speed: float, real_time: bool) -> dict:
-    """The three commands (name -> argv), with their parameter files and overrides."""
+def param_files(profile: str = 'eq26') -> tuple:
+    """The parameter files of every node for ``profile``, in order."""
+    return PARAM_FILES + ((PLANNED_FILE,) if profile == 'planned' else ())
+
+
+def planned_profile(files: tuple):
+    """The plan the profile publisher makes from ``files``: (profile, its options).
+
+    The files' "/**" and "/**/rotrod_profile_publisher" parameters over the defaults,
+    through the same functions as the node (rod_params, profile_from_options).
+    """
+    values = defaults()
+    for f in files:
+        doc = yaml.safe_load(share_file(f).read_text()) or {}
+        for key in ('/**', '/**/rotrod_profile_publisher'):
+            values.update((doc.get(key) or {}).get('ros__parameters') or {})
+    return profile_from_options('planned', values, rod_params(values)), values
+
+
+def node_commands(output: Path, speed: float, real_time: bool, profile: str = 'eq26',
+                  duration: float | None = None) -> dict:
+    """The three commands (name -> argv), with their parameter files and overrides.
+
+    ``duration``: how long the profile publisher streams (s; default: the files').
+    """
     files = []
-    for f in PARAM_FILES:
+    for f in param_files(profile):
         files += ['--params-file', str(share_file(f))]
     sim_over, pub_over = [], []
+    if duration is not None:
+        pub_over += ['-p', f'duration:={float(duration)!r}']
     if real_time:
         sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=0.05']
-        pub_over = ['-p', 'use_sim_time:=false']
+        pub_over += ['-p', 'use_sim_time:=false']
     elif speed is not None:
         sim_over = ['-p', f'real_time_factor:={float(speed)}']
     return {
@@ -122,23 +164,38 @@ class Processes:
 
 
 def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
-        real_time: bool = False, timeout: float | None = None, quiet: bool = False) -> dict:
-    """Run the scenario; return the summary (also printed unless ``quiet``)."""
+        real_time: bool = False, timeout: float | None = None, quiet: bool = False,
+        profile: str = 'eq26') -> dict:
+    """Run the scenario; return the summary (also printed unless ``quiet``).
+
+    ``profile``: ``eq26`` (the paper's) or ``planned`` (config/planned.yaml's).
+    """
+    if profile not in PROFILES:
+        raise ValueError(f'profile must be one of {PROFILES}, got {profile!r}')
     output = Path(output).resolve()
     if output.exists():
         output.unlink()
     say = (lambda *a: None) if quiet else print
     env = ros_environment(os.environ)
-    cmds = node_commands(output, speed, real_time)
     factor = 1.0 if real_time else float(speed or 2.0)
-    profile = Eq26Profile(period=15.0, omega_target=2.0)
-    t_run = 40.0
+    if profile == 'planned':
+        streamed, values = planned_profile(param_files(profile))
+        t_run = streamed.end_time + HOLD
+        what = f'the planned spin-up of {PLANNED_FILE} (Table 1)'
+        cmds = node_commands(output, speed, real_time, profile, duration=t_run)
+    else:
+        streamed = Eq26Profile(period=15.0, omega_target=2.0)
+        t_run = 40.0
+        what = 'Eq. 26 (Table 1)'
+        cmds = node_commands(output, speed, real_time)
     timeout = timeout or 60.0 + 3.0 * t_run / factor
     procs = Processes(output.parent / 'logs', env)
-    say(f'rotrod demo: Eq. 26 (Table 1) through simulator, profile_publisher and '
+    say(f'rotrod demo: {what} through simulator, profile_publisher and '
         f'rerun_logger; {t_run:g} s of simulated time at {factor:g}x real time '
         f'(ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}, discovery '
         f'{env["ROS_AUTOMATIC_DISCOVERY_RANGE"]})')
+    if profile == 'planned':
+        say(describe(streamed, values)[0])
     t0 = time.monotonic()
     try:
         procs.start('simulator', cmds['simulator'])
@@ -166,13 +223,19 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     finally:
         procs.stop_all()
     wall = time.monotonic() - t0
-    summary = summarize(output, profile, t_run)
+    if profile == 'planned':
+        summary = summarize_planned(output, streamed, rod_params(values), t_run)
+    else:
+        summary = summarize(output, streamed, t_run)
     summary['wall_s'] = wall
     say(summary['table'])
     say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
         f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
-        f'mm ({summary["dv_rel"]:.2%} of max |v|); the profile starts '
-        f'{summary["lead_s"]:.3f} s into the recording')
+        f'mm ({summary["dv_rel"]:.2%} of max |v|); ' + (
+            f'the profile starts {summary["lead_s"]:.3f} s into the recording'
+            if profile == 'eq26' else
+            f'the hub starts moving {summary["lead_s"] + streamed.t_start:.3f} s into the '
+            'recording'))
     say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
         f'with: rerun {output}')
     return summary
@@ -198,6 +261,58 @@ def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
             'stages': recorded, 'reference': reference}
 
 
+def summarize_planned(path: Path, profile, params: RodParams, t_run: float) -> dict:
+    """A planned spin-up's recording beside the offline run of the plan.
+
+    The arrival (the recorded w first at the target), the peak deflection, and the
+    whirl after arrival: the free whirl about the static deflection fitted to the
+    recorded motion from SETTLE s after arrival to the end (``fitted_whirl_residual``),
+    beside the plan's prediction, the offline run's (``whirl_residual`` at the
+    arrival) and Eq. 26's.
+    """
+    t, w = recording.read_series(path, recording.OMEGA)
+    tu, u = recording.read_series(path, recording.U)
+    _, v = recording.read_series(path, recording.V)
+    shift = profile_delay(t, w, profile, search=profile.end_time)
+    keep = (tu - shift >= 0) & (tu - shift <= t_run)
+    tt, uu, vv = tu[keep] - shift, u[keep], v[keep]
+    target, end = profile.omega_target, profile.end_time
+    n = math.ceil(t_run / 1e-3)
+    offline = simulate(params, profile, t_run, dt=t_run / n,
+                       initial={'u': static_deflection(params, profile.omega_start)[0]})
+    arrived = float(t[np.nonzero(w == target)[0][0]] - shift)
+    after = tt >= end + SETTLE
+    whirl, misfit = fitted_whirl_residual(params, target, tt[after], uu[after], vv[after])
+    i = int(np.argmin(np.abs(offline.t - end)))
+    offline_whirl = whirl_residual(params, target, offline.u[i], offline.v[i], offline.du[i],
+                                   offline.dv[i])
+    eq26 = simulate(params, Eq26Profile(period=15.0, omega_target=target), 15.0, dt=1e-3)
+    eq26_whirl = whirl_residual(params, target, eq26.u[-1], eq26.v[-1], eq26.du[-1],
+                                eq26.dv[-1])
+    du = float(np.max(np.abs(uu - np.interp(tt, offline.t, offline.u))))
+    dv = float(np.max(np.abs(vv - np.interp(tt, offline.t, offline.v))))
+    peak = float(np.max(np.hypot(uu, vv)))
+    rows = [
+        ('arrival at the target speed [s]', f'{arrived:.3f}', f'{end:.3f}'),
+        ('peak deflection [mm]', f'{1e3 * peak:.5f}',
+         f'{1e3 * float(np.max(np.hypot(offline.u, offline.v))):.5f}'),
+        ('whirl after arrival [um]', f'{1e6 * whirl:.3f}', f'{1e6 * offline_whirl:.3f}'),
+    ]
+    lines = [f'{"":<34}{"recorded":>12}{"offline":>12}']
+    lines += [f'{a:<34}{b:>12}{c:>12}' for a, b, c in rows]
+    lines.append(f'(the plan predicts {1e6 * profile.residual_amplitude:.3f} um; Eq. 26 leaves '
+                 f'{1e6 * eq26_whirl:.3f} um offline; recorded: the free whirl about the '
+                 f'static deflection fitted from {SETTLE:g} s after the plan to the end, '
+                 f'misfit {1e6 * misfit:.3f} um rms)')
+    lead = shift - min(t[0], tu[0])
+    return {'table': '\n'.join(lines), 'shift': shift, 'lead_s': lead, 'du': du, 'dv': dv,
+            'du_rel': du / float(np.max(offline.u)),
+            'dv_rel': dv / float(np.max(np.abs(offline.v))), 'samples': int(len(t)),
+            'arrival_s': arrived, 'peak_m': peak, 'whirl_m': whirl,
+            'offline_whirl_m': offline_whirl, 'eq26_whirl_m': eq26_whirl,
+            'predicted_m': profile.residual_amplitude, 'duration_s': profile.duration}
+
+
 def main(argv: list | None = None) -> int:
     """``python -m rotrod_ros.demo``, which ``rotrod demo`` runs (exit 1 on a failure)."""
     parser = argparse.ArgumentParser(
@@ -210,11 +325,14 @@ def main(argv: list | None = None) -> int:
                              'config/demo.yaml)')
     parser.add_argument('--real-time', action='store_true',
                         help='run at wall-clock speed (no /clock)')
+    parser.add_argument('--profile', choices=PROFILES, default='eq26',
+                        help="eq26 (the paper's, default) or planned (the planned spin-up of "
+                             f'{PLANNED_FILE})')
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
         parser.error(f'--speed must be a finite number > 0, got {args.speed!r}')
     try:
-        run(args.output, speed=args.speed, real_time=args.real_time)
+        run(args.output, speed=args.speed, real_time=args.real_time, profile=args.profile)
     except DemoError as exc:
         print(f'rotrod demo: {exc}', file=sys.stderr)
         return 1

@@ -14,12 +14,17 @@ the last value) is set.
 Profiles (rotrod_core.command.profiles): eq26 (period, omega_target: docs/model.md's Eq. 26),
 constant (omega_target), step (omega_start -> omega_target at t_step), ramp (0 -> omega_target
 over ramp_time from t_start), sine_sweep (offset + amplitude sin of a chirp
-f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s).
+f_start -> f_end over sweep_time), table (table_file: CSV of time s, omega rad/s),
+planned (the fastest vibration-free spin-up omega_start -> omega_target under
+deflection_limit, residual, robust and max_angular_acceleration, planned for the rod
+given by the same rod parameters as the simulator's; it logs what it planned and what
+the simulator must allow, and by default streams the final speed 1 s past the plan).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -29,16 +34,19 @@ from rclpy.node import Node
 from std_msgs.msg import Float64
 
 import rotrod_core.live.scheduling as scheduling
-from rotrod_core.command.profiles import (
+from rotrod_core.command.profiles import Profile
+from rotrod_core.command.registry import (
     OPTION_PROFILES,
     PROFILE_OPTIONS,
-    Profile,
+    describe,
     profile_from_options,
+    stream_duration,
 )
 
 from . import interfaces, node_main, parameter_specs
 from .node_main import ConfigurationError
 from .parameter_specs import Spec
+from .parameters import ROD_SPECS, rod_params
 
 NODE_NAME = 'rotrod_profile_publisher'
 QOS_DEPTH = 1000
@@ -57,6 +65,8 @@ PARAMETERS = (
     Spec('profile', 'eq26', 'the profile to stream', choices=OPTION_PROFILES),
     *(Spec(o.name, o.default, o.description, o.unit, o.low, o.high)
       for o in PROFILE_OPTIONS),
+    *(dataclasses.replace(s, description="planned: the rod planned for (as the "
+                          f"simulator's): {s.description}") for s in ROD_SPECS),
     Spec('rate', 100.0, 'publishing rate, of the node clock (> 0)', 'Hz', 0.0, 1e5),
     Spec('duration', 0.0, 'how long to stream, of the node clock; 0 = to the profile\'s '
          'end', 's', 0.0, 1e9),
@@ -78,7 +88,8 @@ INTERFACES = (
 
 def make_profile(values: dict) -> Profile:
     """The profile described by the parameter values (raises ValueError with the reason)."""
-    return profile_from_options(values['profile'], values)
+    params = rod_params(values) if values['profile'] == 'planned' else None
+    return profile_from_options(values['profile'], values, params)
 
 
 class ProfilePublisher(Node):
@@ -91,10 +102,12 @@ class ProfilePublisher(Node):
             self.profile = make_profile(values)
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
+        for line in describe(self.profile, values):
+            self.get_logger().info(line)
         if not values['rate'] > 0:
             raise ConfigurationError(f'rate must be > 0 Hz, got {values["rate"]!r}')
         self.rate = values['rate']
-        self.duration = values['duration'] or (self.profile.end_time or 0.0)
+        self.duration = values['duration'] or stream_duration(self.profile)
         self.loop, self.hold = values['loop'], values['hold']
         self.realtime_priority = values['realtime_priority']
         self.name = values['profile']

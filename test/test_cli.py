@@ -1,3 +1,4 @@
+import re
 import subprocess
 import sys
 
@@ -102,15 +103,17 @@ def test_plan_refusal_is_a_clear_error(tmp_path, capsys):
     (['--profile', 'constant', '--omega', '1.5'], 1.5),
     (['--profile', 'step', '--omega-target', '1.5', '--omega-start', '0.5', '--t-step', '1'],
      1.5),
-    (['--profile', 'ramp', '--omega-target', '1.5', '--ramp-time', '2', '--t-start', '1'], 1.5),
+    (['--profile', 'ramp', '--omega-target', '1.5', '--ramp-time', '2', '--t-start', '1'],
+     1.5),
     # w = offset + amplitude sin(2 pi (f_start t + (f_end - f_start) t^2 / (2 T))) for
     # t <= T (here the phase at T is 2 pi x 3: back to the offset)
     (['--profile', 'sine_sweep', '--amplitude', '0.3', '--f-start', '1', '--f-end', '2',
       '--sweep-time', '4', '--offset', '1'], 1.0),
     (['--profile', 'table'], 1.0),
+    (['--profile', 'planned', '--omega', '1.5', '--max-angular-acceleration', '2'], 1.5),
 ])
 def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
-    from rotrod_core.command.profiles import PROFILES
+    from rotrod_core.command.registry import OPTION_PROFILES
     table = tmp_path / 'w.csv'
     table.write_text('0,0\n2,1\n4,1\n')
     if argv[-1] == 'table':
@@ -120,7 +123,7 @@ def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
     data = np.loadtxt(out, delimiter=',', skiprows=1)
     t, omega = data[:, 0], data[:, 6]
     assert omega[-1] == pytest.approx(omega_end, abs=1e-9)
-    assert argv[1] in PROFILES
+    assert argv[1] in OPTION_PROFILES
     if argv[1] == 'sine_sweep':
         tt = t[t <= 4.0]
         phase = 2 * np.pi * (1.0 * tt + (2.0 - 1.0) * tt**2 / (2 * 4.0))
@@ -128,7 +131,46 @@ def test_simulate_runs_every_profile(argv, omega_end, tmp_path):
 
 
 def test_every_registered_profile_has_a_cli_test():
-    from rotrod_core.command.profiles import OPTION_PROFILES, PROFILES
+    from rotrod_core.command.profiles import PROFILES
+    from rotrod_core.command.registry import OPTION_PROFILES
     tested = {argv[1] for argv, _ in test_simulate_runs_every_profile.pytestmark[0].args[1]}
     assert tested == set(OPTION_PROFILES)
-    assert set(PROFILES) - tested == {'spin_up'}        # made by `rotrod plan`, tested above
+    # spin_up is the class of `rotrod plan` and of `planned`, tested above and below
+    assert set(PROFILES) - tested == {'spin_up'}
+
+
+def test_simulate_planned_arrives_without_whirl_under_its_bounds(tmp_path, capsys):
+    """The planned profile offline: |w'| within 0.9 x the bound, |r| under the limit, and
+    the motion after arrival a free whirl about MODEL.md's static deflection no larger
+    than the residual asked for."""
+    from reference import R0, W0, K, M
+    out = tmp_path / 'planned.csv'
+    assert main(['simulate', '--profile', 'planned', '--omega', '2', '--max-angular-acceleration',
+                 '2', '--deflection-limit', '0.003', '--residual', '2.5e-7', '--t-end', '12',
+                 '--dt', '0.002', '-o', str(out)]) == 0
+    said = capsys.readouterr().out
+    duration = float(re.search(r'duration ([0-9.]+) s', said).group(1))
+    assert 'planned 0 -> 2 rad/s after 3 s at the start speed' in said
+    data = np.loadtxt(out, delimiter=',', skiprows=1)
+    t, u, v, omega, omega_dot = data[:, 0], data[:, 1], data[:, 2], data[:, 6], data[:, 7]
+    assert np.all(omega[t <= 3.0] == 0.0)                    # the lead: at rest
+    assert np.max(np.abs(omega_dot)) <= 0.9 * 2.0 + 1e-9
+    assert np.max(np.hypot(u, v)) <= 3e-3
+    after = t >= 3.0 + duration
+    assert np.all(omega[after] == pytest.approx(2.0, abs=1e-12))
+    us = M * 4.0 * R0 / (K - M * 4.0)                         # static deflection at 2 rad/s
+    # free whirl about it: z - us = A e^{i (w0 - w) t} + B e^{-i (w0 + w) t}
+    tt = t[after] - t[after][0]
+    basis = np.column_stack([np.exp(1j * (W0 - 2.0) * tt), np.exp(-1j * (W0 + 2.0) * tt)])
+    z = u[after] + 1j * v[after] - us
+    coef, *_ = np.linalg.lstsq(basis, z, rcond=None)
+    assert np.max(np.abs(z - basis @ coef)) < 1e-9          # nothing but the two whirls
+    assert abs(coef[0]) + abs(coef[1]) <= 2.5e-7
+
+
+def test_offline_demo_of_the_planned_spin_up(tmp_path, capsys):
+    assert main(['demo', '--offline', '--profile', 'planned', '--out', str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert 'config/planned.yaml' in out and 'duration' in out
+    data = np.loadtxt(tmp_path / 'planned_run.csv', delimiter=',', skiprows=1)
+    assert data[0, 6] == 0.0 and data[-1, 6] == 2.0

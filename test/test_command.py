@@ -319,3 +319,24 @@ def test_a_late_last_setpoint_is_where_w_ends(jump, arrival):
     assert np.max(np.abs(wd)) <= limit + 1e-9
     assert np.max(np.abs(np.diff(w))) <= limit * (t[1] - t[0]) * (1 + 1e-9)
     assert sh.omega(arrival + 3.0) == jump and sh.setpoint == jump
+
+
+def test_a_jump_of_the_envelopes_line_reaches_w_only_as_a_slow_drift(monkeypatch):
+    """Every sample 1 ms late but one punctual: the lower envelope's line moves by up
+    to 1 ms at once. Taken at once, w' would jump by a x 1 ms / T (10 % of the ramp's
+    slope); the grid's filter (GRID_TIME_CONSTANT) spreads it over seconds."""
+    import rotrod_core.command.shaping as shaping
+    a = 0.3
+
+    def deviation():
+        sh = OmegaSetpointShaper(10.0, delay=0.1)
+        for k in range(1500):
+            late = 0.0 if k == 700 else 0.001
+            sh.command(a * k * T, k * T + late)
+        t = np.linspace(5.0, 14.5, 9501)
+        _, wd = sample(sh, t)
+        return np.max(np.abs(wd - a)) / a
+
+    assert deviation() < 0.01
+    monkeypatch.setattr(shaping, 'GRID_TIME_CONSTANT', 1e-300)     # the line, unfiltered
+    assert deviation() > 0.05

@@ -232,3 +232,27 @@ def test_a_request_not_met_within_the_search_says_which_constraints(monkeypatch)
 def test_refuses_a_batch_of_parameters():
     with pytest.raises(ValueError, match='batch'):
         plan_spin_up(RodParams(eccentricity=[0.05, 0.1]), 2.0)
+
+
+def test_the_whirl_of_a_measured_motion_is_the_fitted_free_whirl():
+    """After an Eq. 26 spin-up (Table 1), the motion at 2 rad/s is the static deflection
+    of MODEL.md plus Eq. 28's two circular whirls: the amplitude fitted from the
+    samples is |A| + |B| of that closed form, and the state's whirl_residual."""
+    from reference import R0, W0, K, M
+
+    from rotrod_core.command.planner import fitted_whirl_residual
+    p = RodParams()
+    run = simulate(p, Eq26Profile(), 19.0, dt=1e-3)
+    hold = run.t >= 15.0
+    t, u, v = run.t[hold], run.u[hold], run.v[hold]
+    amplitude, misfit = fitted_whirl_residual(p, 2.0, t, u, v)
+    us = M * 4.0 * R0 / (K - M * 4.0)
+    tt = t - t[0]
+    basis = np.column_stack([np.exp(1j * (W0 - 2.0) * tt), np.exp(-1j * (W0 + 2.0) * tt)])
+    coef, *_ = np.linalg.lstsq(basis, u + 1j * v - us, rcond=None)
+    assert amplitude == pytest.approx(abs(coef[0]) + abs(coef[1]), rel=1e-6)
+    i = np.argmin(np.abs(run.t - 15.0))
+    state = whirl_residual(p, 2.0, run.u[i], run.v[i], run.du[i], run.dv[i])
+    assert amplitude == pytest.approx(state, rel=1e-6) and misfit < 1e-6 * amplitude
+    with pytest.raises(ValueError, match='samples'):
+        fitted_whirl_residual(p, 2.0, t[:3], u[:3], v[:3])

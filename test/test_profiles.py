@@ -10,6 +10,7 @@ from rotrod_core import (
     Eq26Profile,
     RampProfile,
     SineSweepProfile,
+    SpinUpProfile,
     StepProfile,
     TableProfile,
     make_profile,
@@ -19,7 +20,8 @@ PROFILES = [Eq26Profile(), Eq26Profile(period=4.0, omega_target=-1.5), ConstantP
             StepProfile(2.0, t_step=1.0), RampProfile(2.0, 3.0, t_start=0.5),
             TableProfile([0, 1, 2.5, 4], [0, 1.0, 1.5, 0.2]),
             SineSweepProfile(0.3, 0.5, 3.0, duration=5.5, offset=1.0),
-            SineSweepProfile(0.2, 4.0, 1.0, duration=6.5), SineSweepProfile(0.1, 2.0, 2.0)]
+            SineSweepProfile(0.2, 4.0, 1.0, duration=6.5), SineSweepProfile(0.1, 2.0, 2.0),
+            SpinUpProfile(2.5, [0.5, 0.5, 2.0, 2.0], t_start=1.0)]
 
 
 def test_eq26_matches_model_md():

@@ -31,6 +31,8 @@ PAPER_FIGURES = ('fig03_angular_velocity.png', 'fig04_trajectory.png', 'fig05_sp
                  'fig09_dynamic_frequencies.png', 'fig10_critical_speed.png')
 ANALYSIS_FIGURES = {'campbell.png': (1280, 640), 'critical_speed_map.png': (1280, 800),
                     'coupling_drift.png': (1280, 480)}
+REPORT_FIGURES = {'spin_ups.png': (1280, 480)}
+"""Figures of the reproduction report beyond the paper's."""
 DELTA = 3.0e-3
 E, L_ROD = 100e9, 0.3
 VERDICTS = {'agrees', 'differs', 'agrees in part'}
@@ -137,16 +139,45 @@ def test_paper_figures_are_drawn_images_of_640x480(reproduced, name):
 def test_reproduce_shows_numbered_progress(reproduced):
     stderr = reproduced[2]
     steps = re.findall(r'^\[reproduce (\d+)/(\d+)\] ', stderr, re.M)
-    # one more step than before: the real rig beside the idealisation (issue 18)
-    assert [int(a) for a, _ in steps] == list(range(1, 10)) and {b for _, b in steps} == {'9'}
-    assert stderr.count('done in') == 9 and 'Eq. 26 shape:' in stderr
+    # the real rig beside the idealisation (issue 18), Eq. 26 beside planned spin-ups (19)
+    assert [int(a) for a, _ in steps] == list(range(1, 11)) and {b for _, b in steps} == {'10'}
+    assert stderr.count('done in') == 10 and 'Eq. 26 shape:' in stderr
     assert 'a real rig beside the idealisation' in stderr
+    assert 'Eq. 26 beside 3 planned spin-ups' in stderr
 
 
 def test_report_embeds_every_figure(reproduced):
     text = (reproduced[0] / 'report.md').read_text()
-    for name in PAPER_FIGURES:
+    for name in PAPER_FIGURES + tuple(REPORT_FIGURES):
         assert f']({name})' in text
+    for name, size in REPORT_FIGURES.items():
+        assert_drawn_image(reproduced[0] / name, size)
+
+
+def test_planned_spin_ups_beside_eq26(reproduced):
+    """Eq. 26's row against MODEL.md's closed forms; each plan within the paper's 3 mm,
+    faster than Eq. 26, arriving at the static deflection plus at most its residual, and
+    the acceleration bounds the rows name."""
+    t = table_with((reproduced[0] / 'report.md').read_text(),
+                   'spin-up, Table 1, 0 -> 2 rad/s, 3 mm')
+    rows = {r[0]: [float(x) for x in r[1:]] for r in t[1]}
+    eq26 = rows['Eq. 26 (the paper)']
+    assert eq26[0] == 15.0 and eq26[1] == pytest.approx(2 * 2.0 / 15.0, abs=1e-3)  # 2W/T
+    us = M * 4.0 * R0 / (M * W0**2 - M * 4.0)                   # static deflection, m
+    assert eq26[2] == pytest.approx(1e3 * us, abs=5e-4)          # quasi-static spin-up
+    # the whirl after Eq. 26 is the hold's ellipse, fitted to the simulated hold (Fig. 6)
+    hold, = [f['measured now'] for f in facts_by_where((reproduced[0] / 'report.md').read_text())
+             if f['where'] == 'Fig. 6 (15-20 s)' and 'ellipse' in f['measured now']]
+    semi_major = float(re.search(r'ellipse ([0-9.]+) um x', hold).group(1))
+    assert eq26[3] == pytest.approx(semi_major, abs=1.5e-3)
+    for label, (d, _, p, r, b) in rows.items():
+        assert p <= 3.0 and p >= 1e3 * us - 1e-4 and r < 0.25 or label.startswith('Eq. 26')
+        assert d < 15.0 or label.startswith('Eq. 26')
+        assert b >= r
+    assert rows["planned within the simulator's default bound (max_angular_acceleration 0.5)"
+                ][1] <= 0.45 + 1e-3
+    robust = rows['planned, config/planned.yaml (robust 0.1, max_angular_acceleration 0.5)']
+    assert robust[1] <= 0.45 + 1e-3 and robust[4] < 0.25 < eq26[4]     # the whole band
 
 
 # --- report numbers vs MODEL.md ---------------------------------------------------------
@@ -386,7 +417,7 @@ def test_docs_tables_are_the_ones_the_commands_generate(reproduced, analyzed):
     by_header = {tuple(h): (h, rows) for h, rows in generated}
     page = tables((DOCS / 'reproduce.md').read_text())
     shown = [t for t in page if t[0][0] != 'command']       # the command table is prose
-    assert len(shown) == 8                                   # with the fact table
+    assert len(shown) == 9                     # with the fact table and the spin-ups
     for table in shown:
         assert tuple(table[0]) in by_header, table[0]
         assert_same_table(table, by_header[tuple(table[0])], 'docs/reproduce.md')
@@ -405,10 +436,10 @@ def test_docs_figures_are_the_ones_the_commands_draw(reproduced, analyzed):
     text = (DOCS / 'reproduce.md').read_text()
     linked = re.findall(r'!\[[^\]]*\]\(figures/([^)]+\.png)\)', text)
     assert len(linked) >= 6
-    sizes = dict.fromkeys(PAPER_FIGURES, (640, 480)) | ANALYSIS_FIGURES
+    sizes = dict.fromkeys(PAPER_FIGURES, (640, 480)) | ANALYSIS_FIGURES | REPORT_FIGURES
     for name in linked:
         assert_drawn_image(DOCS / 'figures' / name, sizes[name])
-        fresh = (reproduced[0] if name in PAPER_FIGURES else analyzed[0]) / name
+        fresh = (analyzed[0] if name in ANALYSIS_FIGURES else reproduced[0]) / name
         with Image.open(DOCS / 'figures' / name) as a, Image.open(fresh) as b:
             diff = np.abs(np.asarray(a.convert('L'), float) - np.asarray(b.convert('L'), float))
         assert diff.mean() < 2.0, f'docs/figures/{name} is stale: rerun the command'

@@ -81,14 +81,24 @@ def test_a_rectangular_section_is_built_from_its_two_sizes():
 
 def test_table1_file_holds_the_papers_parameters_and_known_names():
     doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
-    (key, body), = doc.items()
-    assert key == '/**/rotrod_simulator'
-    values = body['ros__parameters']
+    assert list(doc) == ['/**/rotrod_simulator', '/**/rotrod_profile_publisher']
+    values = doc['/**/rotrod_simulator']['ros__parameters']
     assert set(values) <= set(SPECS_BY_NAME)
     assert (values['mass'], values['rod_length'], values['rod_diameter'],
             values['youngs_modulus'], values['eccentricity']) == (M, L, D, E, R0)
     assert values['deflection_limit'] == 0.003          # the paper's 3.0 mm
     build_settings({**defaults(), **values})
+
+
+@pytest.mark.parametrize('name', ['table1.yaml', 'real_rig.yaml'])
+def test_the_profile_publisher_plans_for_the_simulators_rod(name):
+    """Each rod file gives the profile publisher the simulator's rod, deflection limit
+    and acceleration bound, value for value (its planned spin-up is for that rod)."""
+    doc = yaml.safe_load((ROOT / 'config' / name).read_text())
+    simulator = doc['/**/rotrod_simulator']['ros__parameters']
+    publisher = doc['/**/rotrod_profile_publisher']['ros__parameters']
+    shared = {s.name for s in ROD_SPECS} | {'deflection_limit', 'max_angular_acceleration'}
+    assert {k: v for k, v in simulator.items() if k in shared} == publisher
 
 
 def test_pacer_maps_wall_to_simulated_time_and_back():

@@ -192,6 +192,30 @@ def whirl_residual(params: RodParams, omega: float, u, v, du, dv) -> float:
     return float(np.sum(np.abs(s.rows @ e)))
 
 
+def fitted_whirl_residual(params: RodParams, omega: float, t, u, v) -> tuple:
+    """Free-whirl amplitude (m) of a measured motion at constant ``omega``, and the misfit.
+
+    The motion (``t`` s, ``u``, ``v`` m; e.g. published after a spin-up) is fitted by
+    least squares to the static deflection at ``omega`` plus the free motion of the
+    rod at that speed, x(t) = exp(A (t - t[0])) x0 (every mode, k1 != k2 and damping
+    included); the amplitude is :func:`whirl_residual`'s of the fitted x0. Returns
+    (amplitude m, root-mean-square misfit m).
+    """
+    s = _sample(params, 1.0, omega, omega)
+    t = np.asarray(t, dtype=float)
+    z = np.r_[np.asarray(u, dtype=float) - s.target[0], np.asarray(v, dtype=float)
+              - s.target[1]]
+    if t.size < 4 or z.size != 2 * t.size or not np.all(np.isfinite(z)):
+        raise ValueError('fitted_whirl_residual needs >= 4 finite samples of t, u and v')
+    lam, V = np.linalg.eig(_matrix(s.co, omega, 0.0)[:4, :4])
+    W = np.linalg.inv(V)
+    grow = np.exp(np.outer(t - t[0], lam))                   # (n, 4)
+    design = np.r_[((V[0] * grow) @ W).real, ((V[1] * grow) @ W).real]
+    x0, *_ = np.linalg.lstsq(design, z, rcond=None)
+    misfit = float(np.sqrt(np.mean((design @ x0 - z) ** 2)))
+    return float(np.sum(np.abs(s.rows @ x0))), misfit
+
+
 def _basis(n_free: int, x: np.ndarray):
     spline = BSpline(spin_up_knots(n_free), np.eye(n_free + 4), 3)
     return spline(x), spline.derivative()(x)

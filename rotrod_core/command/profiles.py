@@ -615,6 +615,8 @@ class SpinUpProfile(Profile):
     w' = 0 at the end), so w is twice continuously differentiable from the constant
     w = c_0 before 0 to the constant w = c_-1 after ``duration``. This is the shape
     :func:`rotrod_core.plan_spin_up` returns; it also fills the planner's predictions.
+    With ``t_start`` > 0 the same change begins at ``t_start`` (t / duration above
+    becomes (t - t_start) / duration): w holds c_0 until then.
 
     Args:
         duration: length of the change, s (> 0).
@@ -626,11 +628,13 @@ class SpinUpProfile(Profile):
         band_residual: the largest predicted residual over the planner's robust band
             of natural frequencies, m (equals ``residual_amplitude`` without one).
         robust: half-width eps of that band, (1 +- eps) w0.
+        t_start: when the change begins, s (>= 0; default 0).
     """
 
     def __init__(self, duration, control_points, *, peak_deflection=None,
-                 residual_amplitude=None, band_residual=None, robust=0.0):
+                 residual_amplitude=None, band_residual=None, robust=0.0, t_start=0.0):
         self.duration = _finite('SpinUpProfile', 'duration', duration, positive=True)
+        self.t_start = _finite('SpinUpProfile', 't_start', t_start, nonnegative=True)
         try:
             c = np.array(control_points, dtype=float).ravel()
         except (TypeError, ValueError, OverflowError):
@@ -652,13 +656,23 @@ class SpinUpProfile(Profile):
                         64.0 * float(np.max(np.abs(c))) / T)
         _require_finite('SpinUpProfile.duration', 'the angle ~ c duration',
                         float(np.max(np.abs(c))) * T)
+        _require_finite('SpinUpProfile.t_start', 'the end t_start + duration', self.t_start + T)
         self._w = BSpline(spin_up_knots(c.size - 4), c, 3, extrapolate=False)
         self._dw = self._w.derivative()
         self._theta = self._w.antiderivative()
 
     def __repr__(self):
+        start = f' from {self.t_start:g} s' if self.t_start else ''
         return (f'SpinUpProfile({self.omega_start:g} -> {self.omega_target:g} rad/s in '
-                f'{self.duration:.4g} s, {self.control_points.size} control points)')
+                f'{self.duration:.4g} s{start}, {self.control_points.size} control points)')
+
+    def started_at(self, t_start: float) -> SpinUpProfile:
+        """The same change (and predictions) beginning at ``t_start`` (s) instead."""
+        return SpinUpProfile(self.duration, self.control_points,
+                             peak_deflection=self.peak_deflection,
+                             residual_amplitude=self.residual_amplitude,
+                             band_residual=self.band_residual, robust=self.robust,
+                             t_start=t_start)
 
     @property
     def omega_start(self) -> float:
@@ -671,17 +685,20 @@ class SpinUpProfile(Profile):
         return float(self.control_points[-1])
 
     def _x(self, t):
-        return np.clip(np.asarray(t, dtype=float) / self.duration, 0.0, 1.0)
+        return np.clip((np.asarray(t, dtype=float) - self.t_start) / self.duration, 0.0, 1.0)
 
     @_evaluation
     def omega(self, t):
-        """Angular velocity, rad/s."""
-        return _out(t, self._w(self._x(t)))
+        """Angular velocity, rad/s: exactly the end speeds outside the change."""
+        x = self._x(t)
+        w = np.where(x <= 0.0, self.omega_start,
+                     np.where(x >= 1.0, self.omega_target, self._w(x)))
+        return _out(t, w)
 
     @_evaluation
     def omega_dot(self, t):
         """Angular acceleration, rad/s^2 (0 before 0 and after ``duration``)."""
-        tt = np.asarray(t, dtype=float)
+        tt = np.asarray(t, dtype=float) - self.t_start
         inside = (tt >= 0) & (tt <= self.duration)
         return _out(t, np.where(inside, self._dw(self._x(t)) / self.duration, 0.0))
 
@@ -691,8 +708,8 @@ class SpinUpProfile(Profile):
         tt = np.asarray(t, dtype=float)
         T = self.duration
         mid = T * self._theta(self._x(t))
-        head = self.omega_start * np.minimum(tt, 0.0)
-        tail = self.omega_target * np.maximum(tt - T, 0.0)
+        head = self.omega_start * np.minimum(tt, self.t_start)
+        tail = self.omega_target * np.maximum(tt - self.t_start - T, 0.0)
         return _out(t, head + mid + tail)
 
     @property
@@ -719,8 +736,8 @@ class SpinUpProfile(Profile):
 
     @property
     def end_time(self) -> float:
-        """``duration``, s."""
-        return self.duration
+        """``t_start + duration``, s."""
+        return self.t_start + self.duration
 
     def breakpoints(self) -> tuple:
         """The spline's knots in time (its third derivative jumps there), s."""
@@ -734,7 +751,8 @@ class SpinUpProfile(Profile):
         omega_peak = _finite(type(self).__name__, 'with_peak: omega_peak', omega_peak)
         if self.peak == 0:
             raise ValueError('SpinUpProfile.with_peak: an all-zero profile has no shape')
-        return SpinUpProfile(self.duration, self.control_points * (omega_peak / self.peak))
+        return SpinUpProfile(self.duration, self.control_points * (omega_peak / self.peak),
+                             t_start=self.t_start)
 
 
 PROFILES = {
@@ -746,67 +764,6 @@ PROFILES = {
     'table': TableProfile,
     'spin_up': SpinUpProfile,
 }
-
-
-@dataclass(frozen=True)
-class ProfileOption:
-    """One setting of the named profiles, shared by the CLI and the profile publisher."""
-
-    name: str
-    default: Any
-    unit: str
-    description: str
-    low: float | None = None
-    high: float | None = None
-
-
-PROFILE_OPTIONS = (
-    ProfileOption('period', 15.0, 's', 'eq26: stage length T', 0.0, 1e6),
-    ProfileOption('omega_target', 2.0, 'rad/s', 'eq26 and ramp: top speed; constant: the '
-                  'speed; step: the speed after the step', -1e4, 1e4),
-    ProfileOption('omega_start', 0.0, 'rad/s', 'step: the speed before the step',
-                  -1e4, 1e4),
-    ProfileOption('t_step', 1.0, 's', 'step: time of the step', 0.0, 1e6),
-    ProfileOption('ramp_time', 15.0, 's', 'ramp: duration of the ramp', 0.0, 1e6),
-    ProfileOption('t_start', 0.0, 's', 'ramp: start of the ramp', 0.0, 1e6),
-    ProfileOption('amplitude', 0.2, 'rad/s', 'sine_sweep: amplitude of w', -1e4, 1e4),
-    ProfileOption('f_start', 0.5, 'Hz', 'sine_sweep: frequency at the start', 0.0, 1e4),
-    ProfileOption('f_end', 4.0, 'Hz', 'sine_sweep: frequency at the end', 0.0, 1e4),
-    ProfileOption('sweep_time', 30.0, 's', 'sine_sweep: duration of the sweep', 0.0, 1e6),
-    ProfileOption('offset', 0.0, 'rad/s', 'sine_sweep: mean speed', -1e4, 1e4),
-    ProfileOption('table_file', '', '', 'table: CSV file of (time s, omega rad/s) rows'),
-)
-"""The settings of :func:`profile_from_options`, one naming for the CLI and the nodes."""
-
-
-OPTION_PROFILES = ('eq26', 'constant', 'step', 'ramp', 'sine_sweep', 'table')
-"""The profiles :func:`profile_from_options` builds from options (a planned spin-up is
-made by :func:`rotrod_core.plan_spin_up`, ``rotrod plan``)."""
-
-
-def profile_from_options(name: str, options: dict) -> Profile:
-    """The profile ``name`` built from :data:`PROFILE_OPTIONS` values (missing: default).
-
-    Raises ValueError with the reason (unknown name, bad values, no table file).
-    """
-    o = {opt.name: opt.default for opt in PROFILE_OPTIONS}
-    o.update({k: v for k, v in options.items() if v is not None})
-    if name == 'eq26':
-        return Eq26Profile(period=o['period'], omega_target=o['omega_target'])
-    if name == 'constant':
-        return ConstantProfile(o['omega_target'])
-    if name == 'step':
-        return StepProfile(o['omega_target'], t_step=o['t_step'], omega_start=o['omega_start'])
-    if name == 'ramp':
-        return RampProfile(o['omega_target'], o['ramp_time'], t_start=o['t_start'])
-    if name == 'sine_sweep':
-        return SineSweepProfile(o['amplitude'], o['f_start'], o['f_end'],
-                                duration=o['sweep_time'], offset=o['offset'])
-    if name == 'table':
-        if not o['table_file']:
-            raise ValueError('profile table needs a table file (table_file, --table)')
-        return TableProfile.from_csv(o['table_file'])
-    raise ValueError(f'profile must be one of {", ".join(OPTION_PROFILES)}; got {name!r}')
 
 
 def make_profile(name: str, **kwargs: Any) -> Profile:

@@ -9,7 +9,12 @@ fixed lag D:
 - arrivals are placed on a regular grid: the lower envelope (convex hull) of the
   recent arrival times against their sequence numbers. Delivery delays are
   one-sided -- a message can be late, never early -- so the punctual arrivals set
-  the grid, and jitter, stalls and catch-up bursts do not move it;
+  the grid, and jitter, stalls and catch-up bursts do not move it. Once the stream
+  is established, the grid follows that envelope's line smoothly (a first-order
+  filter with time constant ``GRID_TIME_CONSTANT``): the line jumps when a new
+  punctual arrival or the window's middle changes its contact with the hull, and a
+  jump of the grid by d while w changes is an error of w' d in w, an impulse that
+  leaves the rod whirling;
 - setpoint k is reached at its grid time + D, by a ramp from setpoint k - 1;
 - a setpoint that arrives too late for that (a stall longer than D) is not chased:
   until it comes, w follows the stream extrapolated from its last three setpoints
@@ -37,10 +42,25 @@ from rotrod_core.numerics.checks import finite_number
 MIN_STREAM = 10
 """Arrivals after which a stream is established: its slope is extrapolated when late."""
 
+GRID_TIME_CONSTANT = 3.0
+"""Time constant of the grid's phase correction, s: once a stream is established, each
+arrival moves the grid towards the lower envelope's line by interval / this of the
+difference. The line jumps by up to ~0.5 ms at a time on this machine's loopback, and
+each jump during a change of speed is an impulse w' x jump on the rod; filtered over
+3 s (six periods of Table 1's rod) such jumps become slow drifts of the timing
+(``bench/bench_stream.py`` replays arrival times recorded from the nodes, with and
+without the filter)."""
+
 MAX_PATH_SEGMENTS = 50
 """Most segments of an extrapolated path (one per interval, fewer for a stream faster than
 100 Hz). Every ramp of a stream holds its path, and a fast stream keeps a ramp per
 setpoint for the delay ahead: with 1000 segments a 10 kHz stream held ~160 MB of them."""
+
+DEFAULT_MAX_ANGULAR_ACCELERATION = 0.5
+"""The default bound on |w'| of a shaped stream, rad/s^2: the simulator's
+``max_angular_acceleration`` unless configured, and the bound the profile publisher's
+planned spin-up honours by default (one value for both). The paper's Eq. 26 peaks at
+0.27 rad/s^2; 0.5 rad/s^2 bends Table 1's rod back by 0.34 mm."""
 
 MAX_OMEGA = 1e300
 """Largest |w| accepted as a setpoint or initial speed, rad/s: w and its differences
@@ -255,6 +275,7 @@ class OmegaSetpointShaper:
         self._last_arrival = None
         self._recent: deque = deque(maxlen=3)   # (due time, setpoint) of the latest ones
         self._envelope.clear()
+        self._grid = None       # grid time of the latest setpoint of an established stream
         self.interval = self.nominal_interval
         self.setpoint = w
         self.late_setpoints = 0
@@ -289,8 +310,10 @@ class OmegaSetpointShaper:
         arrivals (sequence number -> time); its slope is the stream's interval.
         """
         envelope = self._envelope
+        previous, self._grid = self._grid, None
         if self._last_arrival is not None and t - self._last_arrival > self.max_stall:
             envelope.clear()                       # a pause: a new stream starts here
+            previous = None
         self._last_arrival = t
         envelope.add(t)
         if envelope.count < 2:
@@ -309,6 +332,13 @@ class OmegaSetpointShaper:
             # the grid is unknown, the setpoint is taken as it comes
             return None
         self.interval = slope
+        if previous is not None and envelope.count > MIN_STREAM:
+            # established: move smoothly towards the envelope's line, unless it is
+            # more than half an interval away (then the stream itself has moved)
+            step = previous + slope
+            if abs(grid - step) <= 0.5 * slope:
+                grid = step + min(1.0, slope / GRID_TIME_CONSTANT) * (grid - step)
+        self._grid = grid
         return grid
 
     def command(self, setpoint: float, time: float) -> Ramp:
@@ -410,6 +440,7 @@ class OmegaSetpointShaper:
         w_target, t = _omega('target', target), finite_number('time', time)
         t = max(t, self._ramps[0].start)
         self._envelope.clear()
+        self._grid = None
         self._recent.clear()
         w0 = self.omega(t)
         while len(self._ramps) > 1 and self._ramps[-1].start >= t:

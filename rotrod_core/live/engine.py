@@ -25,7 +25,7 @@ import numpy as np
 import rotrod_core.model.equations as model
 from rotrod_core.analysis.critical import critical_speed
 from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, tangential_bending
-from rotrod_core.command.shaping import OmegaSetpointShaper
+from rotrod_core.command.shaping import DEFAULT_MAX_ANGULAR_ACCELERATION, OmegaSetpointShaper
 from rotrod_core.live.stepper import RealTimeStepper
 from rotrod_core.model.equations import (
     STATE_FIELDS,
@@ -139,7 +139,7 @@ class EngineConfig:
     drive: str = 'velocity'
     coupling: str = 'exact'
     physics_rate: float = 1000.0
-    max_angular_acceleration: float = 0.5
+    max_angular_acceleration: float = DEFAULT_MAX_ANGULAR_ACCELERATION
     max_omega: float = 50.0
     max_torque: float = 100.0
     deflection_limit: float = 0.003

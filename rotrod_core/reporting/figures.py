@@ -358,3 +358,40 @@ def spin_up_plan(plan, run, path, reference=None, reference_run=None,
         a.grid(alpha=0.3)
         a.legend(fontsize=8, loc='best')
     return _save(fig, path)
+
+
+SPIN_UP_COLORS = ('#7f7f7f', '#d62728', '#ff7f0e', '#1f77b4')
+"""Eq. 26 grey, then the planned spin-ups of :mod:`rotrod_core.reporting.spin_ups`."""
+
+
+def spin_up_comparison(rows, path, deflection_limit) -> Path:
+    """Eq. 26 beside planned spin-ups: w(t), w'(t) and the tip path in the rotating frame.
+
+    ``rows``: :class:`rotrod_core.reporting.spin_ups.SpinUp` (time on a common axis, s).
+    """
+    fig, ax = _figure(PLAN_SIZE, 1, 3)
+    for row, color in zip(rows, SPIN_UP_COLORS):
+        r = row.run
+        label = (f'{row.label.split(" (")[0]}: {row.duration:.3g} s, '
+                 f'residual {UM * row.residual:.2g} µm')
+        ax[0, 0].plot(r.t, r.omega, color=color, lw=1.5, label=label)
+        ax[0, 1].plot(r.t, r.omega_dot, color=color, lw=1.2, label=label)
+        _trajectory(ax[0, 2], r.u, r.v, MM, color, label)
+    phi = np.linspace(-0.6, 0.6, 200)
+    ax[0, 2].set_ylim(-3.3, 2.2)
+    ax[0, 2].plot(MM * deflection_limit * np.cos(phi), MM * deflection_limit * np.sin(phi),
+                  'k--', lw=1, label=f'|r| = {MM * deflection_limit:g} mm')
+    ax[0, 1].set_yscale('symlog', linthresh=0.5)
+    for a in ax[0, :2]:
+        a.set_xlabel('time t [s]')
+    ax[0, 0].set_ylabel(r'angular velocity $\omega$ [rad/s]')
+    ax[0, 1].set_ylabel(r"angular acceleration $\dot\omega$ [rad/s$^2$]")
+    ax[0, 2].set_xlabel('radial deflection u [mm]')
+    ax[0, 2].set_ylabel('tangential deflection v [mm]')
+    ax[0, 0].set_title('angular velocity', fontsize=10)
+    ax[0, 1].set_title("angular acceleration (linear within 0.5, then log)", fontsize=10)
+    ax[0, 2].set_title('tip path in the rotating frame', fontsize=10)
+    for a in ax[0]:
+        a.grid(alpha=0.3)
+    ax[0, 2].legend(fontsize=7, loc='upper left')
+    return _save(fig, path)

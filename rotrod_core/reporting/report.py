@@ -143,12 +143,24 @@ def real_rig_table(summaries: list, limit: float) -> str:
     return table(['', *(s.title for s in summaries)], rows)
 
 
+def spin_up_table(rows: list) -> str:
+    """Eq. 26 beside planned spin-ups (:mod:`rotrod_core.reporting.spin_ups`)."""
+    header = ['spin-up, Table 1, 0 -> 2 rad/s, 3 mm', 'duration [s]', "largest |w'| [rad/s^2]",
+              'peak deflection [mm]', 'residual whirl [um]',
+              'largest residual, w0 x 0.9..1.1 [um]']
+    return table(header, [[r.label, f'{r.duration:.4g}', f'{r.max_angular_acceleration:.3g}',
+                           f'{MM * r.peak_deflection:.4f}', f'{1e6 * r.residual:.3g}',
+                           f'{1e6 * r.band_residual:.3g}'] for r in rows])
+
+
 def paper_report(*, facts, stages, frequencies, critical, limit, figures, recording,
-                 command, real_rig=None) -> str:
+                 command, real_rig=None, spin_ups=None) -> str:
     """The whole reproduction report (Markdown).
 
     ``real_rig``: (the two :class:`~rotrod_core.reporting.rig_comparison.RigSummary`, the Campbell
     figure's file name, the Eq. 26 hold speed in rad/s), or None.
+    ``spin_ups``: (the :class:`~rotrod_core.reporting.spin_ups.SpinUp` rows, the figure's
+    file name), or None.
     """
     verdicts: dict[str, int] = {}
     for f in facts:
@@ -194,6 +206,21 @@ def paper_report(*, facts, stages, frequencies, critical, limit, figures, record
             + f' the {MM * limit:.1f} mm criterion.',
             f'![Campbell diagrams of both models]({campbell_figure})\n\n'
             '*Campbell diagrams: the paper\'s idealisation and the real rig*',
+        ]
+    if spin_ups is not None:
+        rows, spin_up_figure = spin_ups
+        parts += [
+            '## Eq. 26 beside planned spin-ups',
+            'The same spin-up to the paper\'s 2 rad/s under its 3 mm, planned '
+            '(`profile: planned` of the profile publisher and `rotrod simulate`; '
+            'docs/planner.md). Every value by `simulate` (steps of at most 1 ms, the '
+            'arrival on the grid): the free whirl left about the static deflection at '
+            '2 rad/s, on the nominal rod and the largest over 21 rods with natural '
+            'frequencies within +-10 % (stiffness scaled).',
+            spin_up_table(rows),
+            f'![Eq. 26 beside planned spin-ups]({spin_up_figure})\n\n'
+            '*Eq. 26 beside planned spin-ups: angular velocity, angular acceleration, tip '
+            'path*',
         ]
     if recording:
         parts += ['## Rerun recording',

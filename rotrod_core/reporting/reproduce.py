@@ -6,6 +6,7 @@ Writes into one output directory (checked first, before any work):
 - ``report.md``: the fact table, stage extremes, frequencies, critical speeds, figures,
   and a real rig (gravity, a steel rod) beside the paper's idealisation;
 - ``real_rig_campbell.png``: Campbell diagrams of both models;
+- ``spin_ups.png``: Eq. 26 beside planned spin-ups (w, w', the tip path);
 - ``eq26.rrd``: the Eq. 26 run as a Rerun recording (unless ``recording=False``).
 
 Progress goes to stderr, one numbered line per step with its duration. Headless:
@@ -25,9 +26,11 @@ from rotrod_core.analysis.modes import static_deflection
 from rotrod_core.analysis.stages import stage_extremes
 from rotrod_core.reporting.output import Progress, prepare_output_dir
 from rotrod_core.reporting.rig_comparison import real_rig, summarize
+from rotrod_core.reporting.spin_ups import PLANNED, spin_ups
 
 REPORT = 'report.md'
 REAL_RIG_CAMPBELL = 'real_rig_campbell.png'
+SPIN_UPS = 'spin_ups.png'
 RECORDING = 'eq26.rrd'
 FIGURES = (
     ('fig03_angular_velocity.png', 'Fig. 3: angular velocity of Eq. 26 vs time'),
@@ -105,7 +108,7 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
     out = prepare_output_dir(out_dir)
     _require(recording)
     params = paper.TABLE1
-    progress = Progress('reproduce', 8 + bool(recording), stream=stream)
+    progress = Progress('reproduce', 9 + bool(recording), stream=stream)
     with progress.step('Eq. 26 run (Table 1, 40 s, dt = 1 ms)'):
         run = paper.eq26_run(params)
     with progress.step(f'dynamic frequencies at {len(paper.FREQUENCY_SPEEDS)} constant speeds '
@@ -124,10 +127,15 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
                                paper.DEFLECTION_LIMIT)
                      for title, p in (("the paper's idealisation", params),
                                       ('real rig', real_rig(params)))]
-    with progress.step(f'{len(FIGURES) + 1} figures'):
+    with progress.step(f'Eq. 26 beside {len(PLANNED)} planned spin-ups (simulate, each also '
+                       'on 21 rods with w0 x 0.9..1.1)'):
+        spin_up_rows = spin_ups(params)
+    with progress.step(f'{len(FIGURES) + 2} figures'):
         paths = _draw(run, frequencies, critical, params, out)
         paths += (figures.campbell_plot({s.title: s.campbell for s in summaries},
-                                        out / REAL_RIG_CAMPBELL),)
+                                        out / REAL_RIG_CAMPBELL),
+                  figures.spin_up_comparison(spin_up_rows, out / SPIN_UPS,
+                                             paper.DEFLECTION_LIMIT))
     rrd = None
     if recording:
         with progress.step(f'Rerun recording {RECORDING}'):
@@ -140,7 +148,8 @@ def reproduce(out_dir, *, recording: bool = True, stream=None,
             frequencies=frequencies, critical=critical, limit=paper.DEFLECTION_LIMIT,
             figures=list(FIGURES), recording=RECORDING if recording else None,
             command=command,
-            real_rig=(summaries, REAL_RIG_CAMPBELL, paper.EQ26.omega_target))
+            real_rig=(summaries, REAL_RIG_CAMPBELL, paper.EQ26.omega_target),
+            spin_ups=(spin_up_rows, SPIN_UPS))
         report_path = out / REPORT
         report_path.write_text(text, encoding='utf-8')
     verdicts = ', '.join(f'{sum(f.verdict == v for f in facts)} {v}'
