@@ -65,8 +65,8 @@ PARAMETERS = (
     Spec('profile', 'eq26', 'the profile to stream', choices=OPTION_PROFILES),
     *(Spec(o.name, o.default, o.description, o.unit, o.low, o.high)
       for o in PROFILE_OPTIONS),
-    *(dataclasses.replace(s, description="planned: the rod planned for (as the "
-                          f"simulator's): {s.description}") for s in ROD_SPECS),
+    *(dataclasses.replace(s, text="planned: the rod planned for (as the "
+                          f"simulator's): {s.text}") for s in ROD_SPECS),
     Spec('rate', 100.0, 'publishing rate, of the node clock (> 0)', 'Hz', 0.0, 1e5),
     Spec('duration', 0.0, 'how long to stream, of the node clock; 0 = to the profile\'s '
          'end', 's', 0.0, 1e9),
