@@ -631,6 +631,10 @@ class SpinUpProfile(Profile):
         t_start: when the change begins, s (>= 0; default 0).
     """
 
+    peak_deflection: float | None
+    residual_amplitude: float | None
+    band_residual: float | None
+
     def __init__(self, duration, control_points, *, peak_deflection=None,
                  residual_amplitude=None, band_residual=None, robust=0.0, t_start=0.0):
         self.duration = _finite('SpinUpProfile', 'duration', duration, positive=True)

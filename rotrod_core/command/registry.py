@@ -203,16 +203,20 @@ def describe(profile: Profile, options: dict) -> list:
     o = options_with_defaults(options)
     bound = float(o['max_angular_acceleration'])
     peak_acc = profile.max_angular_acceleration
-    band = (f', at most {profile.band_residual * 1e6:.3g} um for natural frequencies '
+    nan = math.nan          # a SpinUpProfile made by hand has no planner's predictions
+    peak = nan if profile.peak_deflection is None else profile.peak_deflection
+    residual = nan if profile.residual_amplitude is None else profile.residual_amplitude
+    band_residual = nan if profile.band_residual is None else profile.band_residual
+    band = (f', at most {band_residual * 1e6:.3g} um for natural frequencies '
             f'within (1 +- {profile.robust:g}) w0' if profile.robust else '')
     honoured = (f'within {PLANNED_ACCELERATION_FRACTION:g} x max_angular_acceleration '
                 f'{bound:g} rad/s^2' if bound else 'no bound (max_angular_acceleration 0)')
     lead = f' after {profile.t_start:g} s at the start speed' if profile.t_start else ''
     plan = (f'planned {profile.omega_start:g} -> {profile.omega_target:g} rad/s{lead}: '
             f'duration {profile.duration:.4g} s, peak deflection '
-            f'{profile.peak_deflection * 1e3:.4g} mm '
+            f'{peak * 1e3:.4g} mm '
             f'(deflection_limit {o["deflection_limit"] * 1e3:g} mm), residual whirl '
-            f'{profile.residual_amplitude * 1e6:.3g} um{band} (bound '
+            f'{residual * 1e6:.3g} um{band} (bound '
             f'{o["residual"] * 1e6:.3g} um), largest |w\'| {peak_acc:.4g} rad/s^2 ({honoured})')
     need = math.ceil(peak_acc * 1e3) / 1e3
     if bound:

@@ -36,7 +36,7 @@ BAND = 0.1
 BAND_RODS = 21
 """Rods across the band."""
 
-PLANNED = (
+PLANNED: tuple[tuple[str, dict], ...] = (
     ('planned, fastest (max_angular_acceleration 0: no bound)',
      {'max_angular_acceleration': 0.0}),
     ("planned within the simulator's default bound (max_angular_acceleration 0.5)", {}),
