@@ -52,7 +52,7 @@ RESULT_UNITS = {
 
 def column_name(name: str, unit: str) -> str:
     """``name`` with its unit as a suffix: eccentricity_m, hub_inertia_kg_m2, final_du_m_s."""
-    if unit in ('', '-'):
+    if unit in ('', '-', '1'):          # dimensionless (RodParams says '1')
         return name
     return name + '_' + unit.replace('^', '').replace('/', '_').replace(' ', '_')
 
