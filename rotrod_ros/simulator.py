@@ -26,6 +26,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import SetBool, Trigger
 
 import rotrod_core.live.scheduling as scheduling
+from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
 from rotrod_core.estimation.whirl import WhirlEstimator
 from rotrod_core.live.engine import SimulationEngine
 from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
@@ -47,6 +48,12 @@ INTERFACES = (
         'that long, w ramps to 0 at max_angular_acceleration', COMMAND_QOS_DEPTH),
     sub('cmd/torque', Float64, 'hub torque, N m (drive torque: free rotation); with '
         'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
+    sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
+        "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
+        '(drive torque), by name or as the one entry of a packed field; other joints '
+        'ignored; the same shaping, limits and timeout as cmd/omega and cmd/torque; a '
+        'malformed message is rejected with a warning (docs/ros_integration.md)',
+        COMMAND_QOS_DEPTH),
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
         "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
@@ -94,11 +101,13 @@ class SimulatorNode(Node):
             SimulationEngine(engine_config), settings, self._publish,
             publish_status=self._publish_status, snapshot=lambda: self._estimator,
             logger=self.get_logger(), running=self.context.ok,
-            inputs={'omega': 'cmd/omega', 'torque': 'cmd/torque'})
+            inputs={'omega': 'cmd/omega or joint_command',
+                    'torque': 'cmd/torque or joint_command'})
         submit = self.loop.submit
         self._io = interfaces.create(self, INTERFACES, {
-            'cmd/omega': lambda msg: submit('omega', msg.data),
-            'cmd/torque': lambda msg: submit('torque', msg.data),
+            'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
+            'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
+            'joint_command': self._on_joint_command,
             '~/reset': self._on_reset, '~/pause': self._on_pause})
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -159,6 +168,17 @@ class SimulatorNode(Node):
             return None
         return WhirlEstimator(settings.estimate_window, settings.publish_period,
                               1.0 / settings.estimate_rate)
+
+    # ----------------------------------------------------------------- commands
+    def _on_joint_command(self, msg: JointState) -> None:
+        """joint_command: the hub's entry into the command queue, or a logged rejection."""
+        try:
+            kind, value = hub_command(msg.name, msg.position, msg.velocity, msg.effort,
+                                      self.loop.engine.config.drive)
+        except MalformedJointCommand as exc:
+            self.loop.reject('joint_command', str(exc))
+            return
+        self.loop.submit(kind, value, 'joint_command')
 
     # ----------------------------------------------------------------- services
     def _on_reset(self, request, response):

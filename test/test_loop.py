@@ -285,7 +285,7 @@ def test_a_flood_beyond_the_pending_bound_drops_the_oldest_and_says_so():
     assert run.engine.torque_command == pytest.approx(1e-6 * (PENDING_COMMANDS + 4))
     assert run.log.count('5 dropped so far') == 1
     run.loop.report(force=True)
-    assert run.statuses[-1].values[-1] == ('dropped_commands', 5)
+    assert dict(run.statuses[-1].values)['dropped_commands'] == 5
 
 
 def test_rejections_are_logged_per_source_and_throttled():
@@ -303,6 +303,24 @@ def test_rejections_are_logged_per_source_and_throttled():
     run.submit_at(1.35, 'torque', 1e9)
     run.until_wall(1.5)
     assert run.log.count('cmd/torque rejected') == 2
+
+
+def test_malformed_messages_are_counted_and_logged_throttled_and_change_nothing():
+    run = Run(torque_config())
+    q = 0.01
+    run.submit_at(0.1, 'torque', q, 'joint_command')
+    for t in (0.2, 0.3, 0.4):
+        run.clock.at(START + t, lambda: run.loop.reject('joint_command', 'no velocity'))
+    run.clock.at(START + 0.45, lambda: run.loop.reject('other', 'bad'))
+    run.until_wall(1.0)
+    assert run.loop.malformed_commands == 4 and run.engine.rejected_commands == 0
+    assert run.log.count('joint_command rejected: no velocity') == 1   # 1 s throttle
+    assert run.log.count('other rejected: bad') == 1                   # per source
+    # the torque accepted before acts throughout: L = q (t - 0.1 s)
+    assert run.engine.angular_momentum() == pytest.approx(q * (run.engine.time - 0.1),
+                                                          rel=1e-9)
+    run.loop.report(force=True)
+    assert dict(run.statuses[-1].values)['malformed_commands'] == 4
 
 
 def test_the_command_timeout_stops_the_torque_once_and_a_command_resumes():

@@ -212,6 +212,8 @@ class RealTimeLoop:
         self._commands: deque = deque(maxlen=PENDING_COMMANDS)
         self._command_arrived = threading.Event()
         self.dropped_commands = 0
+        self.malformed_commands = 0
+        """Command messages the host could not read as a command (see :meth:`reject`)."""
         self._drops_logged = 0
         self._timeouts_logged = engine.timeouts
         self._last_level: int | None = None
@@ -278,6 +280,15 @@ class RealTimeLoop:
         self._commands.append((kind, value, self.clock.monotonic(),
                                source or self._inputs[kind]))
         self._command_arrived.set()
+
+    def reject(self, source: str, reason: str) -> None:
+        """A command message from ``source`` that could not be read (any thread).
+
+        Counted and logged with its reason, throttled per source (at most once a
+        wall second); nothing else changes.
+        """
+        self.malformed_commands += 1
+        self._log('warning', f'{source} rejected: {reason}', 'rejected ' + source, 1.0)
 
     def _command_time(self, arrived: float) -> float | None:
         """Simulated time at which a command arrived at ``arrived`` takes effect, or None.
@@ -549,6 +560,7 @@ class RealTimeLoop:
             values = (*health.values, ('paused', self.paused),
                       ('real_time_factor', self.settings.real_time_factor),
                       ('overruns', self.overruns),
-                      ('dropped_commands', self.dropped_commands))
+                      ('dropped_commands', self.dropped_commands),
+                      ('malformed_commands', self.malformed_commands))
             stamp = self._stamps.stamp(self.engine.time)
         self._publish_status(Status(stamp, level, message, values))
