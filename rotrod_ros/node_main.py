@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from collections.abc import Callable
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
+
+SIGNAL_POLL = 0.1
+"""Wall seconds between the spin's checks for a signal when the node handles its own."""
 
 
 def make_executor(name: str, logger, context=None):
@@ -46,10 +51,19 @@ def _shutting_down() -> bool:
     return True
 
 
+def _interrupt(signum, frame):
+    """A signal ends the spin (own_signals): as Ctrl-C does in Python."""
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def _never(node) -> bool:
+    return False
+
+
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *, make_executor: Callable | None = None,
         until: Callable | None = None, started: Callable | None = None,
-        finished: Callable | None = None) -> int:
+        finished: Callable | None = None, own_signals: bool = False) -> int:
     """Parse non-ROS arguments (``--help``), build the node, spin, shut down cleanly.
 
     Args:
@@ -61,13 +75,24 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         until: spin until it returns true (default: until shutdown).
         started: called with the node before spinning.
         finished: called with the node after spinning (also on a signal).
+        own_signals: SIGINT and SIGTERM end the spin with the context still up, so
+            ``finished`` can still publish and wait for acknowledgements; the spin wakes
+            every SIGNAL_POLL s to notice them.
 
-    SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down); an error
-    raised by rclpy while the context is shutting down is part of that, not a failure.
+    SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
+    ``own_signals``); an error raised by rclpy while the context is shutting down is
+    part of that, not a failure.
     """
     argv = list(sys.argv if args is None else args)
     parser.parse_args(remove_ros_args(argv)[1:])
-    rclpy.init(args=argv)
+    if own_signals:
+        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _interrupt)
+        if until is None:
+            until = _never
+    else:
+        rclpy.init(args=argv)
     node = executor = None
     try:
         try:
@@ -84,7 +109,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
                 executor.spin()
             else:
                 while rclpy.ok() and not until(node):
-                    executor.spin_once(timeout_sec=0.1)
+                    executor.spin_once(timeout_sec=SIGNAL_POLL)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         except Exception:

@@ -32,13 +32,16 @@ from std_msgs.msg import Float64MultiArray
 from rotrod_core.reporting.recording import RecordingWriter
 
 from . import interfaces, node_main, parameter_specs
+from .interfaces import ALWAYS
 from .messages import to_seconds
 from .node_main import ConfigurationError
 from .parameter_specs import Spec
 
 NODE_NAME = 'rotrod_rerun_logger'
 QOS_DEPTH = 1000
-"""Subscription queue depth: a burst of publications is not dropped."""
+"""Subscription queue depth where the publisher's history is KEEP_LAST (a burst of
+publications is not dropped); with a simulator started as fast as possible, KEEP_ALL on
+both sides: the simulator waits for the logger instead of dropping (ALWAYS)."""
 
 RECORD_FROM = ('start', 'motion')
 PARAMETERS = (
@@ -59,15 +62,16 @@ READ_ONLY = True
 
 INTERFACES = (   # in the order a simulator's tick publishes them (see _drain)
     interfaces.sub('joint_states', JointState, "joint 'hub': w rad/s and the hub torque "
-                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH),
+                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH,
+                   ALWAYS),
     interfaces.sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('tip/position', PointStamped, 'the mass in the inertial frame, m',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from '
-                   'the motion', QOS_DEPTH),
+                   'the motion', QOS_DEPTH, ALWAYS),
 )
 
 

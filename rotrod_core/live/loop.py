@@ -48,6 +48,8 @@ none: they are applied between ticks as they come), so that the publication it
 computes stays on time."""
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
+READY_WAIT = 0.005
+"""Wall seconds between checks of the host's ``ready`` before the run starts."""
 LEAD = 0.0025
 """Wall seconds (at most; also at most a quarter publish period) by which a tick runs
 ahead of the publications it computes; each publication then waits for its due time,
@@ -180,11 +182,14 @@ class RealTimeLoop:
         running: false once the host is shutting down (an error is then no failure).
         inputs: what the log calls each kind's input, e.g. {'omega': 'cmd/omega'}
             (default the kind).
+        ready: called in the loop's thread before the run starts, every READY_WAIT s,
+            until it returns true (e.g. the host's subscribers are there); simulated
+            time starts then (default: at once).
     """
 
     def __init__(self, engine: SimulationEngine, settings: LoopSettings, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
-                 running=None, inputs=None):
+                 running=None, inputs=None, ready=None):
         self.engine = engine
         self.settings = settings
         self._publish = publish
@@ -194,12 +199,15 @@ class RealTimeLoop:
         self.clock = clock or SystemClock()
         self._running = running or (lambda: True)
         self._inputs = {kind: kind for kind in COMMANDS} | dict(inputs or {})
+        self._ready = ready
         self.lock = threading.RLock()
         """Held while the engine or the loop's state changes (re-entrant)."""
         self._stop = threading.Event()
         self.paused = False
         self.overruns = 0
         """Times the thread fell more than MAX_BACKLOG behind and skipped ahead."""
+        self.publications = 0
+        """Samples handed to ``publish`` so far."""
         self.failure: str | None = None
         self._scheduling = scheduling.ThreadScheduling(self._logger, 'physics thread')
         now = self.clock.monotonic()
@@ -401,6 +409,11 @@ class RealTimeLoop:
             return 'already ' + ('paused' if self.paused else 'running')
 
     # ----------------------------------------------------------------- the thread
+    @property
+    def running(self) -> bool:
+        """Whether the loop's thread is to go on (not stopped)."""
+        return not self._stop.is_set()
+
     def start(self) -> None:
         """Start the loop's thread; simulated time starts from now."""
         with self.lock:
@@ -451,6 +464,7 @@ class RealTimeLoop:
                 return False
             self._published = (sample.time, self.clock.monotonic())
             self._publish(sample, *context)
+            self.publications += 1
         self.report()
         # the next tick is due at an absolute time: the publication's wait and the work
         # after it (estimate, status) must not delay it
@@ -480,6 +494,11 @@ class RealTimeLoop:
         tick is due (None: at once).
         """
         eng = self.engine
+        if self._ready is not None:
+            if not self._ready():
+                return [], self.clock.monotonic() + READY_WAIT
+            self._ready = None                  # started: simulated time runs from now
+            self._restart_clock()
         if self.paused or eng.halted:
             return [], self.clock.monotonic() + IDLE_WAIT
         pacer = self._pacer
@@ -559,7 +578,7 @@ class RealTimeLoop:
             self._next_status = now + 1.0 / self.settings.diagnostics_rate
             values = (*health.values, ('paused', self.paused),
                       ('real_time_factor', self.settings.real_time_factor),
-                      ('overruns', self.overruns),
+                      ('overruns', self.overruns), ('publications', self.publications),
                       ('dropped_commands', self.dropped_commands),
                       ('malformed_commands', self.malformed_commands))
             stamp = self._stamps.stamp(self.engine.time)
