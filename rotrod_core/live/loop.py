@@ -62,7 +62,13 @@ SPIN = 0.0003
 """Wall seconds before a publication's due time at which its thread stops sleeping and
 polls the clock: this machine (a VM) sometimes wakes a sleeping SCHED_FIFO thread
 milliseconds late, a busy one not. Costs about SPIN x publish_rate of a core (3 % at
-100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms."""
+100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms. Not
+while the thread holds a CPU wake-up latency request of at most
+SLEEP_ONLY_LATENCY: idle CPUs then wake at once, and the poll was measured to be half
+of the node's CPU for no gain (docs/realtime.md)."""
+SLEEP_ONLY_LATENCY = 0
+"""Largest CPU wake-up latency request (us, cpu_dma_latency) under which publications
+only sleep to their due time, without SPIN."""
 COMMANDS = ('omega', 'torque')
 """Kinds of command: an angular-velocity setpoint (rad/s) or a hub torque (N m)."""
 
@@ -150,12 +156,12 @@ class SystemClock:
         return event.wait(timeout)
 
     @staticmethod
-    def sleep_until(due: float, stop: threading.Event) -> bool:
-        """Return at monotonic time ``due``: sleep, then poll for the last SPIN s.
+    def sleep_until(due: float, stop: threading.Event, spin: float = SPIN) -> bool:
+        """Return at monotonic time ``due``: sleep, then poll for the last ``spin`` s.
 
         False if ``stop`` is set meanwhile.
         """
-        early = due - time.monotonic() - SPIN
+        early = due - time.monotonic() - spin
         if early > 0 and stop.wait(early):
             return False
         while time.monotonic() < due:
@@ -259,6 +265,12 @@ class RealTimeLoop:
     def _lead(self) -> float:
         """Wall seconds a tick runs ahead: LEAD, at most a quarter publish period."""
         return min(LEAD, 0.25 * self.settings.publish_period / self.settings.real_time_factor)
+
+    @property
+    def _spin(self) -> float:
+        """SPIN, or 0 while a CPU wake-up latency of at most SLEEP_ONLY_LATENCY is held."""
+        held = self._scheduling.cpu_latency
+        return 0.0 if held is not None and held <= SLEEP_ONLY_LATENCY else SPIN
 
     @property
     def _marker_every(self) -> int:
@@ -459,8 +471,10 @@ class RealTimeLoop:
             # what the samples were computed with, also if a service or a parameter
             # change replaces it while they are being published
             context = self.settings, self.engine.config, self._snapshot()
+        spin = self._spin
         for sample in samples:
-            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop):
+            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop,
+                                                                     spin):
                 return False
             self._published = (sample.time, self.clock.monotonic())
             self._publish(sample, *context)
