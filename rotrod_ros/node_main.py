@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 
@@ -12,9 +14,6 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
-
-SIGNAL_POLL = 0.1
-"""Wall seconds between the spin's checks for a signal when the node handles its own."""
 
 
 def make_executor(name: str, logger, context=None):
@@ -56,8 +55,24 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt(signal.Signals(signum).name)
 
 
-def _never(node) -> bool:
-    return False
+def _wake_on_signals(node) -> None:
+    """Wake the executor when SIGINT or SIGTERM comes (own_signals).
+
+    Python runs a signal's handler in the main thread between bytecodes, but the
+    executor waits in C for as long as nothing happens. The interpreter writes each
+    signal's number to a pipe (``signal.set_wakeup_fd``); a thread blocked on the pipe
+    triggers a guard condition, which ends the wait, and the handler then runs.
+    """
+    read_end, write_end = os.pipe()
+    os.set_blocking(write_end, False)
+    signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+    guard = node.create_guard_condition(lambda: None)
+
+    def watch():
+        while os.read(read_end, 64):
+            guard.trigger()
+
+    threading.Thread(target=watch, name='signal_wakeup', daemon=True).start()
 
 
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
@@ -76,8 +91,8 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         started: called with the node before spinning.
         finished: called with the node after spinning (also on a signal).
         own_signals: SIGINT and SIGTERM end the spin with the context still up, so
-            ``finished`` can still publish and wait for acknowledgements; the spin wakes
-            every SIGNAL_POLL s to notice them.
+            ``finished`` can still publish and wait for acknowledgements (Python's
+            handlers, woken through a pipe: :func:`_wake_on_signals`).
 
     SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
     ``own_signals``); an error raised by rclpy while the context is shutting down is
@@ -89,8 +104,6 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, _interrupt)
-        if until is None:
-            until = _never
     else:
         rclpy.init(args=argv)
     node = executor = None
@@ -102,6 +115,8 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
             return 2
         executor = (make_executor or (lambda n: SingleThreadedExecutor()))(node)
         executor.add_node(node)
+        if own_signals:
+            _wake_on_signals(node)
         if started:
             started(node)
         try:
@@ -109,7 +124,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
                 executor.spin()
             else:
                 while rclpy.ok() and not until(node):
-                    executor.spin_once(timeout_sec=SIGNAL_POLL)
+                    executor.spin_once(timeout_sec=0.1)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         except Exception:

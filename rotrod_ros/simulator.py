@@ -121,6 +121,8 @@ class SimulatorNode(Node):
         submit = self.loop.submit
         # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
         self.lossless = settings.real_time_factor == 0
+        self.held_up = 0
+        """Publications a KEEP_ALL subscriber held up (rmw blocked them, then failed)."""
         self.dropped_publications = 0
         """Publications a KEEP_ALL subscriber held up beyond rmw's blocking time while
         paced (dropped rather than delay the clock); as fast as possible, none: the
@@ -256,7 +258,9 @@ class SimulatorNode(Node):
                     self.get_logger().warning(f'{name}: not every publication acknowledged '
                                               f'within {FLUSH_TIMEOUT:g} s')
         self.get_logger().info(f'stopped at simulated time {self.engine.time:.3f} s after '
-                               f'{self.loop.publications} publications')
+                               f'{self.loop.publications} publications ({self.held_up} held '
+                               f'up by a KEEP_ALL subscriber, {self.dropped_publications} '
+                               'dropped)')
 
     # ----------------------------------------------------------------- publishing
     def _send(self, name: str, msg, settings) -> None:
@@ -273,6 +277,7 @@ class SimulatorNode(Node):
         except RCLError:
             if not self.context.ok():
                 raise
+        self.held_up += 1
         while not settings.real_time_factor and self.context.ok() and self.loop.running:
             self.get_logger().info(f'{name}: a KEEP_ALL subscriber is behind; waiting for it',
                                    throttle_duration_sec=5.0)

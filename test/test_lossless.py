@@ -9,7 +9,9 @@ physics up instead of losing messages. The run is a free rotation in torque driv
 a second. The simulator says at its end how many samples it published; the file must
 hold every one of them, on the 10 ms grid of simulated time from 0 with none missing,
 with the values of the offline run from the same initial state (to 1e-7 of their
-largest value: the same RK4 steps, rounded differently over ~1e5 of them).
+largest value: the same RK4 steps, rounded differently over ~1e5 of them); every
+frequencies message with its own sample's stamp (Eq. 28 at that sample's w), every
+estimate at its 0.1 s.
 """
 
 import re
@@ -22,6 +24,7 @@ from node_probes import namespace
 from ros_harness import ros_arguments
 
 from rotrod_core import RodParams, simulate
+from rotrod_core.analysis.modes import dynamic_frequencies
 from rotrod_core.reporting import recording
 
 pytestmark = pytest.mark.ros
@@ -80,3 +83,13 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
         print(f'{entity}: {len(k)} samples, max |live - offline| {error:.3g}')
         # the same RK4 steps; rounding differs over ~1e5 steps (one run: 2e-11 m in u)
         assert error <= 1e-7 * np.max(np.abs(reference)), entity
+    # the frequencies take the stamp of their joint state: Eq. 28 at its w, every sample
+    t_w, w = recording.read_series(out, recording.OMEGA)
+    t_f, f = recording.read_series(out, recording.F_MODEL)
+    assert np.array_equal(t_f, t_w)
+    assert np.array_equal(f, np.column_stack(dynamic_frequencies(RodParams(hub_inertia=J), w)))
+    # an estimate every 0.1 s of simulated time once the 1 s window has filled
+    t_e, _ = recording.read_series(out, recording.F_ESTIMATE)
+    assert t_e[0] == pytest.approx(1.0 - STEP, abs=1e-9)
+    assert np.allclose(np.diff(t_e), 0.1, atol=1e-9)
+    assert t_end - t_e[-1] < 0.1 + 1e-9
