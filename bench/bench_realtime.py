@@ -189,6 +189,48 @@ def fast_run(node, duration: float) -> dict:
             'received_fraction': float(len(rows) / ((stamps[-1] - stamps[0]) / PERIOD + 1))}
 
 
+def fast_recorded_run(duration: float) -> dict:
+    """As fast as possible with rerun_logger recording (KEEP_ALL both ways): speed, and
+    the share of the simulator's publications in the .rrd file."""
+    import re
+    import tempfile
+
+    from rotrod_core.reporting.recording import U, read_series
+    out = Path(tempfile.mkdtemp(prefix='rotrod-bench-')) / 'fast.rrd'
+    logger = subprocess.Popen([*console_script('rerun_logger'),
+                               *ros_arguments(params={'output': str(out)})],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        while 'recording to' not in logger.stderr.readline():
+            if logger.poll() is not None:
+                raise RuntimeError('rerun_logger did not start')
+        sim = Simulator(real_time_factor=0.0, wait_for_subscribers=1)
+        while 'starting:' not in (line := sim.proc.stderr.readline()):
+            if not line and sim.proc.poll() is not None:
+                raise RuntimeError('the simulator did not start')
+        t0 = time.monotonic()
+        c0 = cpu_seconds(sim.proc.pid), cpu_seconds(logger.pid)
+        time.sleep(duration)
+        c1 = cpu_seconds(sim.proc.pid), cpu_seconds(logger.pid)
+        wall = time.monotonic() - t0
+        sim.stop()
+        done = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications',
+                         sim.proc.stderr.read())
+    finally:
+        logger.send_signal(signal.SIGINT)
+        logger.communicate(timeout=120)
+    t_end, published = float(done.group(1)), int(done.group(2))
+    t, _ = read_series(out, U)
+    k = np.round(t / PERIOD).astype(int)
+    contiguous = bool(np.array_equal(k, np.arange(len(k))))
+    out.unlink()
+    return {'wall_s': wall, 'sim_s': t_end, 'speed_x_real_time': t_end / wall,
+            'published': published, 'recorded': int(len(t)), 'contiguous': contiguous,
+            'recorded_percent': 100.0 * min(len(t), published) / published,
+            'simulator_cpu_percent': 100 * (c1[0] - c0[0]) / wall,
+            'logger_cpu_percent': 100 * (c1[1] - c0[1]) / wall}
+
+
 SLEEP_FLOOR = """
 import json, os, sys, threading, time
 from rotrod_core.live.scheduling import CpuLatencyRequest
@@ -268,6 +310,8 @@ def measure(duration: float = 60.0) -> tuple:
         rt = realtime_run(node, duration)
         latency = command_latency(node, trials=20)
         fast = fast_run(node, min(20.0, duration))
+    recorded = fast_recorded_run(min(20.0, duration))
+    with rclpy_test_node('rotrod_bench') as node:
         events = realtime_run(node, min(10.0, duration), executor='events')
         ordinary = realtime_run(node, duration, realtime_priority=0)
         asleep = realtime_run(node, duration, cpu_dma_latency=-1)
@@ -275,7 +319,8 @@ def measure(duration: float = 60.0) -> tuple:
     floor_awake = sleep_floor(duration, cpu_latency=0)
     raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
-           'fast': fast, 'events_executor': events, 'ordinary_scheduling': ordinary,
+           'fast': fast, 'fast_recorded': recorded, 'events_executor': events,
+           'ordinary_scheduling': ordinary,
            'no_cpu_latency_request': asleep, 'sleep_floor': floor,
            'sleep_floor_cpu_latency_0': floor_awake}
     ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
@@ -333,6 +378,15 @@ def measure(duration: float = 60.0) -> tuple:
             note=f"publication step {fast['publish_step_sim_ms_median']:.0f} ms, "
                  f"{100 * fast['received_fraction']:.1f} % received, "
                  f"{fast['wall_s']:.0f} s run"),
+        row('as fast as possible, recorded by rerun_logger (KEEP_ALL: the simulator waits '
+            'for it)', recorded['speed_x_real_time'], 'x real time', better='higher',
+            target=Target('>=', 30), fmt='.1f',
+            note=f"{recorded['recorded_percent']:.2f} % of {recorded['published']} "
+                 f"publications in the .rrd"
+                 f"{'' if recorded['contiguous'] else ' (NOT contiguous)'}; CPU simulator "
+                 f"{recorded['simulator_cpu_percent']:.0f} %, logger "
+                 f"{recorded['logger_cpu_percent']:.0f} % of a core; "
+                 f"{recorded['wall_s']:.0f} s run"),
         row('exit after SIGINT', rt['exit_after_sigint_s'], 's', fmt='.2f',
             note=exit_note(rt['exit_after_sigint_s']),
             comparisons=[Comparison(ev, events['exit_after_sigint_s'],

@@ -235,8 +235,21 @@ def cmd_plan(args) -> int:
 
 def cmd_urdf(args) -> int:
     """Write the URDF for the parameter files and options (stdout without -o)."""
-    from rotrod_core.model.urdf import rod_params_from_files, simulator_parameters, urdf_text
+    from rotrod_core.model.urdf import (
+        Ros2Control,
+        rod_params_from_files,
+        simulator_parameters,
+        urdf_text,
+    )
     files = args.params_file or []
+    ros2_control = None
+    if args.ros2_control:
+        ros2_control = Ros2Control(tuple(args.ros2_control), args.joint_commands_topic,
+                                   args.joint_states_topic)
+    elif args.joint_commands_topic != Ros2Control.joint_commands_topic or (
+            args.joint_states_topic != Ros2Control.joint_states_topic):
+        raise ValueError('--joint-commands-topic and --joint-states-topic go with '
+                         '--ros2-control')
     params = rod_params_from_files(files, namespace=args.namespace)
     given = {k: getattr(args, k) for k in PARAM_FIELDS if getattr(args, k) is not None}
     if args.section:
@@ -245,7 +258,8 @@ def cmd_urdf(args) -> int:
     if disk_radius is None:
         disk_radius = float(simulator_parameters(files, namespace=args.namespace).get(
             'disk_radius', DEFAULT_HUB_RADIUS))
-    text = urdf_text(params.replace(**given), disk_radius=disk_radius)
+    text = urdf_text(params.replace(**given), disk_radius=disk_radius,
+                     ros2_control=ros2_control)
     if args.output is None:
         sys.stdout.write(text)
         return 0
@@ -452,6 +466,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--disk-radius', type=_finite, default=None,
                    help="radius of the drawn disk [m] (default: the files' disk_radius, "
                         f'else {DEFAULT_HUB_RADIUS:g})')
+    p.add_argument('--ros2-control', action='append', choices=('velocity', 'effort'),
+                   metavar='INTERFACE',
+                   help="add a <ros2_control> block for topic_based_ros2_control's "
+                        "TopicBasedSystem with this command interface on joint 'hub': "
+                        'velocity (drive velocity) or effort (drive torque); twice for both')
+    p.add_argument('--joint-commands-topic', default='/rotrod/joint_command',
+                   help="the block's joint_commands_topic: the simulator's joint_command "
+                        '(default /rotrod/joint_command: a simulator in namespace /rotrod)')
+    p.add_argument('--joint-states-topic', default='/rotrod/joint_states',
+                   help="the block's joint_states_topic: the simulator's joint_states "
+                        '(default /rotrod/joint_states)')
     p.add_argument('-o', '--output', type=Path, help='FILE.urdf (default: stdout)')
     p.set_defaults(func=cmd_urdf)
 

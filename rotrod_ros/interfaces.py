@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 PUBLISHER, SUBSCRIPTION, SERVICE = 'pub', 'sub', 'srv'
+ALWAYS = 'always'
+"""Interface.keep_all: KEEP_ALL history whatever the node's settings."""
 
 
 @dataclass(frozen=True)
@@ -27,6 +29,12 @@ class Interface:
     """What it carries, with units."""
     depth: int = 10
     """History depth of a topic's QoS (reliable, volatile: rclpy's default)."""
+    keep_all: str = ''
+    """When the topic has KEEP_ALL history instead of the last ``depth`` messages:
+    '' never, ALWAYS, or a condition the node names when it creates its interfaces
+    (see :func:`create`). Reliable and KEEP_ALL on both sides, nothing is dropped: a
+    subscriber that falls behind stops acknowledging, and the publisher's publish
+    blocks (rmw_fastrtps: 100 ms, then fails) until it catches up."""
 
     def __post_init__(self):
         if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE):
@@ -38,14 +46,16 @@ class Interface:
         return f'{self.type.__module__.split(".")[0]}/{self.type.__name__}'
 
 
-def pub(name: str, msg_type: type, description: str, depth: int = 10) -> Interface:
+def pub(name: str, msg_type: type, description: str, depth: int = 10,
+        keep_all: str = '') -> Interface:
     """A topic the node publishes."""
-    return Interface(PUBLISHER, name, msg_type, description, depth)
+    return Interface(PUBLISHER, name, msg_type, description, depth, keep_all)
 
 
-def sub(name: str, msg_type: type, description: str, depth: int = 10) -> Interface:
+def sub(name: str, msg_type: type, description: str, depth: int = 10,
+        keep_all: str = '') -> Interface:
     """A topic the node subscribes to."""
-    return Interface(SUBSCRIPTION, name, msg_type, description, depth)
+    return Interface(SUBSCRIPTION, name, msg_type, description, depth, keep_all)
 
 
 def srv(name: str, srv_type: type, description: str) -> Interface:
@@ -53,18 +63,34 @@ def srv(name: str, srv_type: type, description: str) -> Interface:
     return Interface(SERVICE, name, srv_type, description)
 
 
-def create(node, interfaces, callbacks: dict | None = None) -> dict:
+def qos(interface: Interface, conditions=()):
+    """The topic's QoS (reliable, volatile), or its depth for rclpy's default.
+
+    KEEP_ALL history if its ``keep_all`` is ALWAYS or in ``conditions``, else the last
+    ``depth`` messages.
+    """
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    if interface.keep_all and (interface.keep_all == ALWAYS
+                               or interface.keep_all in conditions):
+        return QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=interface.depth,
+                          reliability=ReliabilityPolicy.RELIABLE)
+    return interface.depth
+
+
+def create(node, interfaces, callbacks: dict | None = None, conditions=()) -> dict:
     """Create ``interfaces`` on ``node`` (rclpy); return them by name.
 
-    ``callbacks`` holds each subscription's and service's callback, by name.
+    ``callbacks`` holds each subscription's and service's callback, by name;
+    ``conditions`` the ``keep_all`` conditions that hold (see :func:`qos`).
     """
     callbacks = callbacks or {}
     made = {}
     for i in interfaces:
         if i.kind == PUBLISHER:
-            made[i.name] = node.create_publisher(i.type, i.name, i.depth)
+            made[i.name] = node.create_publisher(i.type, i.name, qos(i, conditions))
         elif i.kind == SUBSCRIPTION:
-            made[i.name] = node.create_subscription(i.type, i.name, callbacks[i.name], i.depth)
+            made[i.name] = node.create_subscription(i.type, i.name, callbacks[i.name],
+                                                    qos(i, conditions))
         else:
             made[i.name] = node.create_service(i.type, i.name, callbacks[i.name])
     unused = set(callbacks) - set(made)

@@ -14,7 +14,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from rotrod_core.model import interface
 from rotrod_core.model.interface import FREQUENCY_LABEL, JOINT_NAMES, joint_values, stamp_parts
-from rotrod_core.model.scene import scene
+from rotrod_core.model.scene import TRAIL_ID, scene
 
 HUB_JOINT = interface.HUB_JOINT
 """The hub's joint name in joint_states (the nodes that read it look it up by name)."""
@@ -82,6 +82,26 @@ def diagnostics(t: Time, name: str, hardware_id: str, level: int, message: str,
     return DiagnosticArray(header=header(t), status=[status])
 
 
+_TRAIL_POINTS: dict = {}
+"""geometry_msgs/Point of recent trail positions, by (x, y, z): a trail point is drawn
+in every marker array until it leaves the trail, and making a Point costs more than
+finding one (py-spy: the markers were a fifth of the node's CPU)."""
+_MAX_TRAIL_POINTS = 20000
+
+
+def _trail_points(xyz) -> list:
+    cache = _TRAIL_POINTS
+    if len(cache) > _MAX_TRAIL_POINTS:
+        cache.clear()
+    out = []
+    for p in xyz:
+        point = cache.get(p)
+        if point is None:
+            point = cache[p] = Point(x=p[0], y=p[1], z=p[2])
+        out.append(point)
+    return out
+
+
 def markers(t: Time, frame_id: str, ns: str, *, disk_radius: float, theta: float,
             rod: Sequence[Sequence[float]], rod_diameter: float, mass_radius: float,
             trail: Iterable[Sequence[float]]) -> MarkerArray:
@@ -102,6 +122,7 @@ def markers(t: Time, frame_id: str, ns: str, *, disk_radius: float, theta: float
         m.scale.x, m.scale.y, m.scale.z = shape.scale
         m.color = ColorRGBA(r=shape.color[0], g=shape.color[1], b=shape.color[2],
                             a=shape.color[3])
-        m.points = [Point(x=x, y=y, z=z) for x, y, z in shape.points]
+        m.points = (_trail_points(shape.points) if shape.id == TRAIL_ID else
+                    [Point(x=x, y=y, z=z) for x, y, z in shape.points])
         out.append(m)
     return MarkerArray(markers=out)

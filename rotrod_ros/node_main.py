@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 
@@ -46,10 +50,35 @@ def _shutting_down() -> bool:
     return True
 
 
+def _interrupt(signum, frame):
+    """A signal ends the spin (own_signals): as Ctrl-C does in Python."""
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+def _wake_on_signals(node) -> None:
+    """Wake the executor when SIGINT or SIGTERM comes (own_signals).
+
+    Python runs a signal's handler in the main thread between bytecodes, but the
+    executor waits in C for as long as nothing happens. The interpreter writes each
+    signal's number to a pipe (``signal.set_wakeup_fd``); a thread blocked on the pipe
+    triggers a guard condition, which ends the wait, and the handler then runs.
+    """
+    read_end, write_end = os.pipe()
+    os.set_blocking(write_end, False)
+    signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+    guard = node.create_guard_condition(lambda: None)
+
+    def watch():
+        while os.read(read_end, 64):
+            guard.trigger()
+
+    threading.Thread(target=watch, name='signal_wakeup', daemon=True).start()
+
+
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *, make_executor: Callable | None = None,
         until: Callable | None = None, started: Callable | None = None,
-        finished: Callable | None = None) -> int:
+        finished: Callable | None = None, own_signals: bool = False) -> int:
     """Parse non-ROS arguments (``--help``), build the node, spin, shut down cleanly.
 
     Args:
@@ -61,13 +90,22 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         until: spin until it returns true (default: until shutdown).
         started: called with the node before spinning.
         finished: called with the node after spinning (also on a signal).
+        own_signals: SIGINT and SIGTERM end the spin with the context still up, so
+            ``finished`` can still publish and wait for acknowledgements (Python's
+            handlers, woken through a pipe: :func:`_wake_on_signals`).
 
-    SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down); an error
-    raised by rclpy while the context is shutting down is part of that, not a failure.
+    SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
+    ``own_signals``); an error raised by rclpy while the context is shutting down is
+    part of that, not a failure.
     """
     argv = list(sys.argv if args is None else args)
     parser.parse_args(remove_ros_args(argv)[1:])
-    rclpy.init(args=argv)
+    if own_signals:
+        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _interrupt)
+    else:
+        rclpy.init(args=argv)
     node = executor = None
     try:
         try:
@@ -77,6 +115,8 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
             return 2
         executor = (make_executor or (lambda n: SingleThreadedExecutor()))(node)
         executor.add_node(node)
+        if own_signals:
+            _wake_on_signals(node)
         if started:
             started(node)
         try:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 
 from . import profile_publisher, rerun_logger, rig_monitor, simulator
-from .interfaces import PUBLISHER, SERVICE, SUBSCRIPTION
+from .interfaces import ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
 from .parameter_specs import format_value, range_text
 from .parameters import ALL_SPECS as SIMULATOR_SPECS
 
@@ -42,6 +42,9 @@ def node_section(executable: str, module, specs, read_only: bool | None) -> list
     order = {kind: n for n, kind in enumerate(KINDS)}
     for i in sorted(module.INTERFACES, key=lambda i: order[i.kind]):
         qos = f' (QoS depth {i.depth})' if i.kind != SERVICE and i.depth != 10 else ''
+        if i.keep_all:
+            qos = (' (QoS KEEP_ALL)' if i.keep_all == ALWAYS else
+                   f' (QoS KEEP_ALL {i.keep_all}, else depth {i.depth})')
         lines.append(f'| {KINDS[i.kind]} `{i.name}` | {i.type_name} | '
                      f'{_cell(i.description)}{qos} |')
     lines += ['', '| parameter | type | default | unit | range | at run time | description |',

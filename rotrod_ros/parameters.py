@@ -61,6 +61,7 @@ class NodeSettings(LoopSettings):
     estimate_window: float = 1.0
     estimate_rate: float = 10.0
     executor: str = 'single_threaded'
+    wait_for_subscribers: int = 0
 
 
 _ENGINE = EngineConfig()
@@ -147,6 +148,12 @@ NODE_SPECS = (
     Spec('estimate_rate', _NODE.estimate_rate,
          'rate of frequencies/estimate, of simulated time (<= publish_rate)', 'Hz',
          0.01, 1e3),
+    Spec('wait_for_subscribers', _NODE.wait_for_subscribers,
+         'simulated time starts (from 0) once each of joint_states, tip/deflection, '
+         'tip/position, frequencies (and frequencies/estimate when estimate_window > 0) '
+         'has at least this many subscriptions: with rerun_logger started first, a run '
+         'as fast as possible is recorded from its first publication; 0 = at once',
+         '', 0, 1000, read_only=True),
     Spec('executor', _NODE.executor,
          'rclpy executor for commands, services and parameters: single_threaded | events '
          '(rclpy\'s experimental EventsExecutor: measured worse, see '

@@ -21,7 +21,9 @@ leaves a file without footer holding everything up to its last write, at most
 from __future__ import annotations
 
 import argparse
+import bisect
 import sys
+import time
 
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.clock import Clock, ClockType
@@ -32,13 +34,24 @@ from std_msgs.msg import Float64MultiArray
 from rotrod_core.reporting.recording import RecordingWriter
 
 from . import interfaces, node_main, parameter_specs
+from .interfaces import ALWAYS
 from .messages import to_seconds
 from .node_main import ConfigurationError
 from .parameter_specs import Spec
 
 NODE_NAME = 'rotrod_rerun_logger'
 QOS_DEPTH = 1000
-"""Subscription queue depth: a burst of publications is not dropped."""
+"""Subscription queue depth where the publisher's history is KEEP_LAST (a burst of
+publications is not dropped); with a simulator started as fast as possible, KEEP_ALL on
+both sides: the simulator waits for the logger instead of dropping (ALWAYS)."""
+
+TAKE_BUDGET = 0.05
+"""Wall seconds a callback spends at most taking the messages already received (the
+flush timer runs between)."""
+JOINT_HISTORY = 100000
+"""Joint states whose stamps the logger keeps for the frequencies that come after them."""
+CLOSE_BUDGET = 10.0
+"""Wall seconds the logger spends at most at its end on messages already received."""
 
 RECORD_FROM = ('start', 'motion')
 PARAMETERS = (
@@ -57,17 +70,18 @@ PARAMETERS = (
 READ_ONLY = True
 """The logger's parameters are set at start only."""
 
-INTERFACES = (   # in the order a simulator's tick publishes them (see _drain)
+INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pending)
     interfaces.sub('joint_states', JointState, "joint 'hub': w rad/s and the hub torque "
-                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH),
+                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH,
+                   ALWAYS),
     interfaces.sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('tip/position', PointStamped, 'the mass in the inertial frame, m',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w',
-                   QOS_DEPTH),
+                   QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from '
-                   'the motion', QOS_DEPTH),
+                   'the motion', QOS_DEPTH, ALWAYS),
 )
 
 
@@ -95,22 +109,37 @@ class RerunLogger(Node):
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
         self._omega_at_rest = 0.0
+        # joint states' (DDS source time ns, stamp s), oldest first, for the frequencies
+        self._joint_times: list = []
+        self._joint_stamps: list = []
+        self._unstamped: list = []       # (source time ns, message, is the estimate)
+        handlers = {'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
+                    'tip/position': self._on_position,
+                    'frequencies': lambda m, info: self._on_frequencies(m, info, False),
+                    'frequencies/estimate': lambda m, info: self._on_frequencies(m, info,
+                                                                                 True)}
+        self._handlers = [handlers[i.name] for i in INTERFACES]
+
+        def received(index):
+            def callback(msg, info):
+                self._handlers[index](msg, info)
+                self._take_pending()
+            return callback
         io = interfaces.create(self, INTERFACES, {
-            'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
-            'tip/position': self._on_position,
-            'frequencies': lambda m: self._on_frequencies(m, False),
-            'frequencies/estimate': lambda m: self._on_frequencies(m, True)})
+            i.name: received(k) for k, i in enumerate(INTERFACES)})
         self._topics = [io[i.name] for i in INTERFACES]     # in a tick's order
         self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         self.get_logger().info(f'recording to {self.writer.path}{where}')
 
-    def _on_joint(self, msg: JointState) -> None:
+    def _on_joint(self, msg: JointState, info) -> None:
         if 'hub' not in msg.name:
             return
         i = list(msg.name).index('hub')
         t, omega = to_seconds(msg.header.stamp), msg.velocity[i]
+        self._joint_times.append(info['source_timestamp'])
+        self._joint_stamps.append(t)
         if self._last_stamp is None:
             self.get_logger().info(f'receiving: first joint state stamped {t:.3f} s')
             self._omega_at_rest = omega
@@ -121,19 +150,71 @@ class RerunLogger(Node):
             self.get_logger().info(f'recording: the hub moved at stamp {t:.3f} s; the file '
                                    f'starts {self.writer.pretrigger:g} s before')
 
-    def _on_deflection(self, msg: Vector3Stamped) -> None:
+    def _on_deflection(self, msg: Vector3Stamped, info) -> None:
         self.writer.add_deflection(to_seconds(msg.header.stamp), msg.vector.x, msg.vector.y)
 
-    def _on_position(self, msg: PointStamped) -> None:
+    def _on_position(self, msg: PointStamped, info) -> None:
         p = msg.point
         self.writer.add_position(to_seconds(msg.header.stamp), p.x, p.y, p.z)
 
-    def _on_frequencies(self, msg: Float64MultiArray, estimate: bool) -> None:
-        # Float64MultiArray has no stamp: it is published with the joint state of the
-        # same instant, so it takes that stamp.
-        if self._last_stamp is None or len(msg.data) < 2:
+    def _on_frequencies(self, msg: Float64MultiArray, info, estimate: bool) -> None:
+        if len(msg.data) >= 2:
+            self._unstamped.append((info['source_timestamp'], msg, estimate))
+
+    def _stamp_frequencies(self, final: bool = False) -> None:
+        """Give the frequencies received the stamp of their joint state, and write them.
+
+        Float64MultiArray has no stamp: the simulator publishes it after the joint state
+        of the same instant, so it takes the stamp of the last joint state published
+        (DDS source time) before it. One is stamped once a later joint state has come
+        (until then one may still be on its way), or at the end (``final``). Frequencies
+        from before the first joint state received are left out.
+        """
+        times, stamps, waiting = self._joint_times, self._joint_stamps, []
+        if not times:
+            if final:
+                self._unstamped.clear()
             return
-        self.writer.add_frequencies(self._last_stamp, msg.data[0], msg.data[1], estimate)
+        newest = times[-1]
+        for sent, msg, estimate in self._unstamped:
+            if sent > newest and not final:
+                waiting.append((sent, msg, estimate))
+                continue
+            k = bisect.bisect_right(times, sent) - 1
+            if k >= 0:
+                self.writer.add_frequencies(stamps[k], msg.data[0], msg.data[1], estimate)
+        self._unstamped = waiting
+        # the last JOINT_HISTORY joint states: the frequencies' queue can be that far
+        # behind the joint states' (each subscription has its own)
+        if len(times) > 2 * JOINT_HISTORY:
+            del times[:JOINT_HISTORY], stamps[:JOINT_HISTORY]
+
+    def _take_pending(self, budget: float = TAKE_BUDGET) -> int:
+        """Handle the messages received but not taken yet, for up to ``budget`` s.
+
+        One message per subscription in turn (a tick's order), taken as rclpy's executor
+        and ``wait_for_message`` take them (that also works after the shutdown): one
+        executor callback then handles a whole burst, where the executor's own
+        round per message cost most of the logger's time (py-spy). Returns how many.
+        """
+        taken = 0
+        deadline = time.monotonic() + budget
+        while time.monotonic() < deadline:
+            progress = False
+            for sub, handle in zip(self._topics, self._handlers):
+                try:
+                    with sub.handle:
+                        got = sub.handle.take_message(sub.msg_type, sub.raw)
+                except Exception:  # the subscription or its context is gone
+                    got = None
+                if got is not None:
+                    handle(got[0], got[1])
+                    taken += 1
+                    progress = True
+            if not progress:
+                break
+        self._stamp_frequencies()
+        return taken
 
     def _flush(self) -> None:
         try:
@@ -142,35 +223,10 @@ class RerunLogger(Node):
             self.get_logger().warning(f'writing the recording: {exc}',
                                       throttle_duration_sec=10.0)
 
-    def _drain(self) -> int:
-        """Handle the messages received but not taken yet; return how many.
-
-        A signal stops the executor at once, possibly with the last tick's messages
-        still queued: they were received before the signal, so they belong in the file.
-        One message per subscription in turn keeps each tick's messages together (the
-        frequencies take the stamp of the joint state before them). Taken as rclpy's
-        executor and ``wait_for_message`` take them, which works after the shutdown.
-        """
-        taken = 0
-        for _ in range(QOS_DEPTH):
-            progress = False
-            for sub in self._topics:
-                try:
-                    with sub.handle:
-                        got = sub.handle.take_message(sub.msg_type, sub.raw)
-                except Exception:  # the subscription or its context is gone
-                    got = None
-                if got is not None:
-                    sub.callback(got[0])
-                    taken += 1
-                    progress = True
-            if not progress:
-                break
-        return taken
-
     def close(self) -> None:
         """Handle the messages already received, write what is buffered, close the file."""
-        drained = self._drain()
+        drained = self._take_pending(budget=CLOSE_BUDGET)
+        self._stamp_frequencies(final=True)
         self.writer.close()
         if drained:
             self.get_logger().info(f'handled {drained} messages received before the end')

@@ -15,10 +15,13 @@ from __future__ import annotations
 import argparse
 import gc
 import sys
+import time
 from collections import deque
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -26,6 +29,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import SetBool, Trigger
 
 import rotrod_core.live.scheduling as scheduling
+from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
 from rotrod_core.estimation.whirl import WhirlEstimator
 from rotrod_core.live.engine import SimulationEngine
 from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
@@ -37,9 +41,19 @@ from .node_main import ConfigurationError
 from .parameters import ALL_SPECS, SPECS_BY_NAME, build_settings
 
 NODE_NAME = 'rotrod_simulator'
+FLUSH_TIMEOUT = 10.0
+"""Wall seconds a lossless simulator waits at its end for its subscribers to
+acknowledge what it published (rmw sends acknowledgement requests periodically)."""
 COMMAND_QOS_DEPTH = PENDING_COMMANDS
 """Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
 must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
+
+LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
+"""The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
+rerun_logger) gets every publication, the physics waiting for it when it falls behind."""
+SAMPLE_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
+                 'frequencies/estimate')
+"""The topics published at each sample (the estimate at estimate_rate)."""
 
 INTERFACES = (
     sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity); with '
@@ -47,19 +61,26 @@ INTERFACES = (
         'that long, w ramps to 0 at max_angular_acceleration', COMMAND_QOS_DEPTH),
     sub('cmd/torque', Float64, 'hub torque, N m (drive torque: free rotation); with '
         'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
+    sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
+        "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
+        '(drive torque), by name or as the one entry of a packed field; other joints '
+        'ignored; the same shaping, limits and timeout as cmd/omega and cmd/torque; a '
+        'malformed message is rejected with a warning (docs/ros_integration.md)',
+        COMMAND_QOS_DEPTH),
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
         "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
-        '1/publish_rate of simulated time'),
+        '1/publish_rate of simulated time', keep_all=LOSSLESS),
     pub('tip/deflection', messages.Vector3Stamped, "(u, v, 0) m in frame 'rotor' (rotating: "
-        'x radial, y tangential), plus Gaussian noise of deflection_noise m (a sensor)'),
+        'x radial, y tangential), plus Gaussian noise of deflection_noise m (a sensor)',
+        keep_all=LOSSLESS),
     pub('tip/position', messages.PointStamped, "the mass, m, in frame 'world' (inertial; "
-        'z = rod length)'),
+        'z = rod length)', keep_all=LOSSLESS),
     pub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w (Eq. 28, or the '
-        "eigen analysis); one dimension labelled 'f1_f2_hz'"),
+        "eigen analysis); one dimension labelled 'f1_f2_hz'", keep_all=LOSSLESS),
     pub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from the '
         'published (u, v) over the last estimate_window, every 1/estimate_rate; NaN: no '
-        "estimate; it describes the window's middle"),
+        "estimate; it describes the window's middle", keep_all=LOSSLESS),
     pub('markers', messages.MarkerArray, "disk, rod, mass, trail (frame 'world'), at "
         'marker_rate Hz of simulated time'),
     pub('/diagnostics', messages.DiagnosticArray, 'OK / WARN / ERROR with the reason and '
@@ -94,12 +115,24 @@ class SimulatorNode(Node):
             SimulationEngine(engine_config), settings, self._publish,
             publish_status=self._publish_status, snapshot=lambda: self._estimator,
             logger=self.get_logger(), running=self.context.ok,
-            inputs={'omega': 'cmd/omega', 'torque': 'cmd/torque'})
+            inputs={'omega': 'cmd/omega or joint_command',
+                    'torque': 'cmd/torque or joint_command'},
+            ready=self._subscribers_ready if settings.wait_for_subscribers else None)
         submit = self.loop.submit
+        # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
+        self.lossless = settings.real_time_factor == 0
+        self.held_up = 0
+        """Publications a KEEP_ALL subscriber held up (rmw blocked them, then failed)."""
+        self.dropped_publications = 0
+        """Publications a KEEP_ALL subscriber held up beyond rmw's blocking time while
+        paced (dropped rather than delay the clock); as fast as possible, none: the
+        physics waits."""
         self._io = interfaces.create(self, INTERFACES, {
-            'cmd/omega': lambda msg: submit('omega', msg.data),
-            'cmd/torque': lambda msg: submit('torque', msg.data),
-            '~/reset': self._on_reset, '~/pause': self._on_pause})
+            'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
+            'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
+            'joint_command': self._on_joint_command,
+            '~/reset': self._on_reset, '~/pause': self._on_pause},
+            conditions={LOSSLESS} if self.lossless else ())
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -160,6 +193,31 @@ class SimulatorNode(Node):
         return WhirlEstimator(settings.estimate_window, settings.publish_period,
                               1.0 / settings.estimate_rate)
 
+    def _waited_topics(self) -> list:
+        return [t for t in SAMPLE_TOPICS
+                if t != 'frequencies/estimate' or self.settings.estimate_window]
+
+    def _subscribers_ready(self) -> bool:
+        """Whether every sample topic has wait_for_subscribers subscriptions (loop thread)."""
+        wanted = self.settings.wait_for_subscribers
+        topics = self._waited_topics()
+        if any(self._io[t].get_subscription_count() < wanted for t in topics):
+            return False
+        self.get_logger().info(f'starting: {wanted} subscription(s) on each of '
+                               f'{", ".join(topics)}')
+        return True
+
+    # ----------------------------------------------------------------- commands
+    def _on_joint_command(self, msg: JointState) -> None:
+        """joint_command: the hub's entry into the command queue, or a logged rejection."""
+        try:
+            kind, value = hub_command(msg.name, msg.position, msg.velocity, msg.effort,
+                                      self.loop.engine.config.drive)
+        except MalformedJointCommand as exc:
+            self.loop.reject('joint_command', str(exc))
+            return
+        self.loop.submit(kind, value, 'joint_command')
+
     # ----------------------------------------------------------------- services
     def _on_reset(self, request, response):
         with self.loop.lock:
@@ -186,27 +244,71 @@ class SimulatorNode(Node):
         self.loop.start()
 
     def stop(self) -> None:
-        """Stop the physics thread (returns when it has ended)."""
+        """Stop the physics thread (returns when it has ended); say what was published.
+
+        Lossless (started as fast as possible), first wait up to FLUSH_TIMEOUT for the
+        reliable subscribers to acknowledge every sample already published.
+        """
         self.loop.stop()
+        if self.lossless and self.context.ok():
+            deadline = time.monotonic() + FLUSH_TIMEOUT
+            for name in SAMPLE_TOPICS:
+                left = max(0.0, deadline - time.monotonic())
+                if not self._io[name].wait_for_all_acked(Duration(seconds=left)):
+                    self.get_logger().warning(f'{name}: not every publication acknowledged '
+                                              f'within {FLUSH_TIMEOUT:g} s')
+        self.get_logger().info(f'stopped at simulated time {self.engine.time:.3f} s after '
+                               f'{self.loop.publications} publications ({self.held_up} held '
+                               f'up by a KEEP_ALL subscriber, {self.dropped_publications} '
+                               'dropped)')
 
     # ----------------------------------------------------------------- publishing
+    def _send(self, name: str, msg, settings) -> None:
+        """Publish ``msg`` on ``name``, waiting for a KEEP_ALL subscriber if need be.
+
+        rmw blocks a KEEP_ALL publication while a KEEP_ALL subscriber's history is full,
+        then fails. As fast as possible the physics waits for it (so nothing is lost);
+        paced, the publication is dropped and counted (the clock does not wait).
+        """
+        publisher = self._io[name]
+        try:
+            publisher.publish(msg)
+            return
+        except RCLError:
+            if not self.context.ok():
+                raise
+        self.held_up += 1
+        while not settings.real_time_factor and self.context.ok() and self.loop.running:
+            self.get_logger().info(f'{name}: a KEEP_ALL subscriber is behind; waiting for it',
+                                   throttle_duration_sec=5.0)
+            try:
+                publisher.publish(msg)
+                return
+            except RCLError:
+                pass
+        self.dropped_publications += 1
+        self.get_logger().warning(f'{name}: a KEEP_ALL subscriber is behind: '
+                                  f'{self.dropped_publications} publications dropped so far',
+                                  throttle_duration_sec=1.0)
+
     def _publish(self, s: Sample, settings, config, estimator) -> None:
-        io, st, stamp = self._io, s.state, messages.stamp(s.stamp)
+        st, stamp, send = s.state, messages.stamp(s.stamp), self._send
         u, v = st.u, st.v
         if settings.deflection_noise:              # a sensor's noise: the state is untouched
             du, dv = self._noise.normal(0.0, settings.deflection_noise, 2)
             u, v = u + float(du), v + float(dv)
-        io['joint_states'].publish(messages.joint_state(stamp, st, s.torque))
-        io['tip/deflection'].publish(messages.deflection(stamp, u, v, self._rotor_frame))
-        io['tip/position'].publish(messages.position(stamp, s.position, self._world_frame))
-        io['frequencies'].publish(messages.frequencies(*s.frequencies))
+        send('joint_states', messages.joint_state(stamp, st, s.torque), settings)
+        send('tip/deflection', messages.deflection(stamp, u, v, self._rotor_frame), settings)
+        send('tip/position', messages.position(stamp, s.position, self._world_frame), settings)
+        send('frequencies', messages.frequencies(*s.frequencies), settings)
+        io = self._io
         if settings.publishes_clock:
             io['/clock'].publish(messages.clock(stamp))
         if estimator is not None:
             estimate = estimator.push(s.time, u, v)
             if estimate is not None:
-                io['frequencies/estimate'].publish(
-                    messages.frequencies(estimate.f1, estimate.f2))
+                send('frequencies/estimate', messages.frequencies(estimate.f1, estimate.f2),
+                     settings)
         if s.markers:
             rod = rod_centerline(config.params, st.u, st.v, st.theta,
                                  scale=settings.marker_deflection_scale)
@@ -246,6 +348,9 @@ def _started(node: SimulatorNode) -> None:
         # busy machine does not delay commands past setpoint_delay either
         scheduling.run_current_thread_at(priority - 1, node.get_logger(), 'executor thread')
     s, c = node.settings, node.engine.config
+    if s.wait_for_subscribers:
+        node.get_logger().info(f'waiting for {s.wait_for_subscribers} subscription(s) on each '
+                               f'of {", ".join(node._waited_topics())} (wait_for_subscribers)')
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
         f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
@@ -257,7 +362,7 @@ def main(args: list | None = None) -> int:
     return node_main.run(NODE_NAME, SimulatorNode, _parser(), args,
                          make_executor=lambda node: node_main.make_executor(
                              node.settings.executor, node.get_logger()),
-                         started=_started, finished=SimulatorNode.stop)
+                         started=_started, finished=SimulatorNode.stop, own_signals=True)
 
 
 if __name__ == '__main__':

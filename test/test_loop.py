@@ -7,6 +7,7 @@ momentum, which only the hub torque changes (exact coupling): L(t) = sum of Q_i 
 how long Q_i acted.
 """
 
+import dataclasses
 import heapq
 import itertools
 import struct
@@ -23,6 +24,7 @@ from rotrod_core.live.loop import (
     LEAD,
     MAX_BACKLOG,
     PENDING_COMMANDS,
+    SPIN,
     LoopSettings,
     RealTimeLoop,
 )
@@ -39,6 +41,8 @@ class FakeClock:
         self.now = START
         self._events = []
         self._order = itertools.count()
+        self.spins = []
+        """The spin asked of each sleep_until (s)."""
 
     def monotonic(self) -> float:
         return self.now
@@ -68,7 +72,8 @@ class FakeClock:
             return True
         return self._run_until(self.now + timeout, event)
 
-    def sleep_until(self, due: float, stop) -> bool:
+    def sleep_until(self, due: float, stop, spin: float = 0.0) -> bool:
+        self.spins.append(spin)
         self._run_until(due)
         return not stop.is_set()
 
@@ -285,7 +290,7 @@ def test_a_flood_beyond_the_pending_bound_drops_the_oldest_and_says_so():
     assert run.engine.torque_command == pytest.approx(1e-6 * (PENDING_COMMANDS + 4))
     assert run.log.count('5 dropped so far') == 1
     run.loop.report(force=True)
-    assert run.statuses[-1].values[-1] == ('dropped_commands', 5)
+    assert dict(run.statuses[-1].values)['dropped_commands'] == 5
 
 
 def test_rejections_are_logged_per_source_and_throttled():
@@ -303,6 +308,24 @@ def test_rejections_are_logged_per_source_and_throttled():
     run.submit_at(1.35, 'torque', 1e9)
     run.until_wall(1.5)
     assert run.log.count('cmd/torque rejected') == 2
+
+
+def test_malformed_messages_are_counted_and_logged_throttled_and_change_nothing():
+    run = Run(torque_config())
+    q = 0.01
+    run.submit_at(0.1, 'torque', q, 'joint_command')
+    for t in (0.2, 0.3, 0.4):
+        run.clock.at(START + t, lambda: run.loop.reject('joint_command', 'no velocity'))
+    run.clock.at(START + 0.45, lambda: run.loop.reject('other', 'bad'))
+    run.until_wall(1.0)
+    assert run.loop.malformed_commands == 4 and run.engine.rejected_commands == 0
+    assert run.log.count('joint_command rejected: no velocity') == 1   # 1 s throttle
+    assert run.log.count('other rejected: bad') == 1                   # per source
+    # the torque accepted before acts throughout: L = q (t - 0.1 s)
+    assert run.engine.angular_momentum() == pytest.approx(q * (run.engine.time - 0.1),
+                                                          rel=1e-9)
+    run.loop.report(force=True)
+    assert dict(run.statuses[-1].values)['malformed_commands'] == 4
 
 
 def test_the_command_timeout_stops_the_torque_once_and_a_command_resumes():
@@ -462,6 +485,22 @@ def test_real_time_priority_while_paced_only_and_the_clock_starts_after_the_chan
     run.until_wall(run.clock.now - START + 0.1)
     run.until_wall(run.clock.now - START + 0.1)
     assert asked == [30, 0, 40]                 # ordinary as fast as possible; 40 once
+
+
+def test_publications_only_sleep_while_idle_cpus_are_held_awake(tmp_path):
+    device = tmp_path / 'cpu_dma_latency'
+    device.write_bytes(b'')
+    run = Run(cpu_dma_latency=0)
+    run.loop._scheduling = scheduling.ThreadScheduling(run.log, 'physics thread',
+                                                       device=str(device))
+    run.until_wall(0.2)
+    assert len(run.clock.spins) >= 19 and set(run.clock.spins) == {0.0}
+    run.loop.reconfigure(run.engine.config,
+                         dataclasses.replace(run.loop.settings, cpu_dma_latency=-1))
+    n = len(run.clock.spins)
+    run.until_wall(0.4)
+    assert len(run.clock.spins) - n >= 19 and set(run.clock.spins[n + 1:]) == {SPIN}
+    assert all(sent == s.due for sent, s in run.samples)
 
 
 def test_the_cpu_latency_request_is_held_as_asked_and_released(tmp_path):

@@ -17,11 +17,16 @@ import pytest
 from pytransform3d.urdf import UrdfTransformManager
 from reference import R0, L
 
+from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
+from rotrod_core.live.engine import EngineConfig
 from rotrod_core.model import interface
 from rotrod_core.model.params import RodParams
 from rotrod_core.model.urdf import (
     SHIPPED_FILE,
+    Ros2Control,
     rod_params_from_files,
+    ros2_control_block,
+    simulator_parameters,
     urdf_for_parameter_files,
     urdf_text,
 )
@@ -122,6 +127,98 @@ def test_a_rectangular_rod_is_drawn_as_a_box_and_a_batch_is_refused():
         urdf_text(RodParams(eccentricity=np.array([0.1, 0.2])))
     with pytest.raises(ValueError, match='disk_radius'):
         urdf_text(RodParams(), disk_radius=0.0)
+
+
+def topic_based_system_write(block, values):
+    """The JointState TopicBasedSystem::write publishes for a <ros2_control> block.
+
+    As topic_based_ros2_control's source does: every joint of the block in ``name`` in
+    block order; each command interface's value appended to its field (``values``:
+    interface -> value).
+    """
+    fields = {'position': [], 'velocity': [], 'effort': []}
+    names = []
+    for joint in block.iter('joint'):
+        names.append(joint.get('name'))
+        for command in joint.iter('command_interface'):
+            fields[command.get('name')].append(values[command.get('name')])
+    return names, fields['position'], fields['velocity'], fields['effort']
+
+
+@pytest.mark.parametrize('interfaces', [('velocity',), ('effort',), ('effort', 'velocity')])
+def test_the_ros2_control_block_is_topic_based_systems_for_the_hub(interfaces):
+    options = Ros2Control(interfaces, '/rod1/joint_command', '/rod1/joint_states')
+    text = urdf_text(RodParams(), ros2_control=options)
+    without = text.replace(ros2_control_block(options), '')
+    assert without.replace('\n\n</robot>', '\n</robot>') == SHIPPED.read_text()
+    root = ElementTree.fromstring(text)
+    (block,) = root.iter('ros2_control')
+    assert block.get('type') == 'system'
+    assert block.find('hardware/plugin').text == 'topic_based_ros2_control/TopicBasedSystem'
+    params = {e.get('name'): e.text for e in block.iter('param')}
+    assert params == {'joint_commands_topic': '/rod1/joint_command',
+                      'joint_states_topic': '/rod1/joint_states',
+                      'trigger_joint_command_threshold': '-1'}
+    joints = {j.get('name'): ([c.get('name') for c in j.iter('command_interface')],
+                              [s.get('name') for s in j.iter('state_interface')])
+              for j in block.iter('joint')}
+    assert tuple(joints) == interface.JOINT_NAMES
+    assert joints['hub'] == (list(interfaces), ['position', 'velocity', 'effort'])
+    assert joints['tip_radial'] == joints['tip_tangential'] == ([], ['position', 'velocity'])
+    # the URDF's kinematics are unchanged by the block
+    tm = transform_manager(text)
+    assert tip_by_fk(tm, 1.0, 0.001, 0.002) == pytest.approx(
+        tip_closed_form(R0, L, 1.0, 0.001, 0.002), abs=1e-15)
+    # what the interface sends for this block is the hub's command
+    message = topic_based_system_write(block, {'velocity': 1.25, 'effort': -0.03})
+    for drive, expected in (('velocity', ('omega', 1.25)), ('torque', ('torque', -0.03))):
+        wanted = {'velocity': 'velocity', 'torque': 'effort'}[drive]
+        if wanted in interfaces:
+            assert hub_command(*message, drive) == expected
+        else:
+            with pytest.raises(MalformedJointCommand, match='ignored: drive is'):
+                hub_command(*message, drive)
+
+
+def test_ros2_control_options_are_checked_and_rotrod_urdf_adds_the_block():
+    for bad in ((), ('position',), ('velocity', 'velocity')):
+        with pytest.raises(ValueError, match='command_interfaces'):
+            Ros2Control(bad)
+    with pytest.raises(ValueError, match='joint_states_topic must be an absolute'):
+        Ros2Control(joint_states_topic='joint_states')
+    cmd = [sys.executable, '-m', 'rotrod_core.cli', 'urdf']
+    printed = subprocess.run([*cmd, '--ros2-control', 'velocity', '--ros2-control', 'effort',
+                              '--joint-commands-topic', '/r/joint_command'], check=True,
+                             cwd=ROOT, capture_output=True, text=True).stdout
+    assert printed == urdf_text(RodParams(), ros2_control=Ros2Control(
+        ('velocity', 'effort'), '/r/joint_command'))
+    bad = subprocess.run([*cmd, '--joint-states-topic', '/x'], cwd=ROOT, capture_output=True,
+                         text=True)
+    assert bad.returncode == 2 and 'go with --ros2-control' in bad.stderr
+
+
+def test_the_ros2_control_example_configures_the_simulator_and_the_hubs_controllers():
+    import yaml
+    path = ROOT / 'config' / 'ros2_control_example.yaml'
+    sim = simulator_parameters([path], namespace='/rotrod')
+    assert sim == {'drive': 'velocity', 'command_timeout': 0.5}
+    EngineConfig(drive=sim['drive'], command_timeout=sim['command_timeout'])   # accepted
+    assert simulator_parameters([path]) == {}          # not the root namespace's simulator
+    doc = yaml.safe_load(path.read_text())
+    manager = doc['controller_manager']['ros__parameters']
+    types = {name: v['type'] for name, v in manager.items() if isinstance(v, dict)}
+    assert types == {
+        'joint_state_broadcaster': 'joint_state_broadcaster/JointStateBroadcaster',
+        'hub_velocity_controller': 'velocity_controllers/JointGroupVelocityController',
+        'hub_trajectory_controller': 'joint_trajectory_controller/JointTrajectoryController',
+        'hub_effort_controller': 'effort_controllers/JointGroupEffortController'}
+    for name in types:
+        if name != 'joint_state_broadcaster':
+            assert doc[name]['ros__parameters']['joints'] == ['hub']
+    jtc = doc['hub_trajectory_controller']['ros__parameters']
+    # a velocity command interface alone needs position and velocity states (JTC's docs)
+    assert jtc['command_interfaces'] == ['velocity']
+    assert set(jtc['state_interfaces']) == {'position', 'velocity'}
 
 
 def test_parameter_files_apply_in_order_to_the_named_node_in_its_namespace(tmp_path):

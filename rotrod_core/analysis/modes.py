@@ -28,6 +28,21 @@ def _omega_array(omega, name='omega'):
     return finite_array(name, omega)
 
 
+def has_eq28(params: RodParams) -> bool:
+    """Whether Eq. 28 gives the dynamic frequencies: an isotropic rod without damping."""
+    return bool(params.is_isotropic and not np.any(np.asarray(params.damping_ratio) > 0))
+
+
+def eq28(w0, omega) -> tuple:
+    """Eq. 28: (f1, f2) = (|w0 - |w|| / 2pi, (w0 + |w|) / 2pi) Hz, w0 and w in rad/s.
+
+    For floats (a live engine, per sample, with w0 cached) or arrays; see
+    :func:`dynamic_frequencies` for when it applies.
+    """
+    a = abs(omega)
+    return abs(w0 - a) / TWO_PI, (w0 + a) / TWO_PI
+
+
 def dynamic_frequencies(params: RodParams, omega):
     """The two dynamic frequencies (f1, f2) in Hz at constant angular velocity ``omega``.
 
@@ -38,9 +53,8 @@ def dynamic_frequencies(params: RodParams, omega):
     Vectorized over ``omega``.
     """
     w = _omega_array(omega)
-    if params.is_isotropic and not np.any(np.asarray(params.damping_ratio) > 0):
-        w0 = params.natural_frequency
-        f1, f2 = np.abs(w0 - np.abs(w)) / TWO_PI, (w0 + np.abs(w)) / TWO_PI
+    if has_eq28(params):
+        f1, f2 = eq28(params.natural_frequency, w)
     else:
         modes = [modal_analysis(params, wi) for wi in w.ravel()]
         f1 = np.array([m.frequencies[0] for m in modes]).reshape(w.shape)

@@ -24,7 +24,13 @@ import numpy as np
 
 import rotrod_core.model.equations as model
 from rotrod_core.analysis.critical import critical_speed
-from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, tangential_bending
+from rotrod_core.analysis.modes import (
+    dynamic_frequencies,
+    eq28,
+    has_eq28,
+    modal_analysis,
+    tangential_bending,
+)
 from rotrod_core.command.shaping import DEFAULT_MAX_ANGULAR_ACCELERATION, OmegaSetpointShaper
 from rotrod_core.live.stepper import RealTimeStepper
 from rotrod_core.model.equations import (
@@ -334,6 +340,8 @@ class SimulationEngine:
         self._always_stable = bool(p.is_isotropic and not float(p.damping_ratio) > 0)
         self._stability: dict = {}
         self._frequencies: dict = {}
+        self._w0 = float(p.natural_frequency) if has_eq28(p) else None
+        """w0, rad/s, where Eq. 28 gives the frequencies (None: the eigen analysis)."""
 
     # ----------------------------------------------------------------- state
     @property
@@ -397,6 +405,8 @@ class SimulationEngine:
     def frequencies(self) -> tuple:
         """Dynamic frequencies (f1, f2) in Hz at the current w (Eq. 28 or eigen analysis)."""
         w = self.state.omega
+        if self._w0 is not None:
+            return eq28(self._w0, w)
         f = self._frequencies.get(w)
         if f is None:
             if len(self._frequencies) > 64:

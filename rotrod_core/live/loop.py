@@ -48,6 +48,12 @@ none: they are applied between ticks as they come), so that the publication it
 computes stays on time."""
 IDLE_WAIT = 0.05
 """Wall seconds between checks while paused or halted."""
+LEVEL_CHECK = 0.005
+"""Wall seconds between looks at the engine's health level for a change (a change is
+reported within this; as fast as possible, a look per publication cost 3 % of the
+thread's time)."""
+READY_WAIT = 0.005
+"""Wall seconds between checks of the host's ``ready`` before the run starts."""
 LEAD = 0.0025
 """Wall seconds (at most; also at most a quarter publish period) by which a tick runs
 ahead of the publications it computes; each publication then waits for its due time,
@@ -60,7 +66,13 @@ SPIN = 0.0003
 """Wall seconds before a publication's due time at which its thread stops sleeping and
 polls the clock: this machine (a VM) sometimes wakes a sleeping SCHED_FIFO thread
 milliseconds late, a busy one not. Costs about SPIN x publish_rate of a core (3 % at
-100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms."""
+100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms. Not
+while the thread holds a CPU wake-up latency request of at most
+SLEEP_ONLY_LATENCY: idle CPUs then wake at once, and the poll was measured to be half
+of the node's CPU for no gain (docs/realtime.md)."""
+SLEEP_ONLY_LATENCY = 0
+"""Largest CPU wake-up latency request (us, cpu_dma_latency) under which publications
+only sleep to their due time, without SPIN."""
 COMMANDS = ('omega', 'torque')
 """Kinds of command: an angular-velocity setpoint (rad/s) or a hub torque (N m)."""
 
@@ -148,12 +160,12 @@ class SystemClock:
         return event.wait(timeout)
 
     @staticmethod
-    def sleep_until(due: float, stop: threading.Event) -> bool:
-        """Return at monotonic time ``due``: sleep, then poll for the last SPIN s.
+    def sleep_until(due: float, stop: threading.Event, spin: float = SPIN) -> bool:
+        """Return at monotonic time ``due``: sleep, then poll for the last ``spin`` s.
 
         False if ``stop`` is set meanwhile.
         """
-        early = due - time.monotonic() - SPIN
+        early = due - time.monotonic() - spin
         if early > 0 and stop.wait(early):
             return False
         while time.monotonic() < due:
@@ -180,11 +192,14 @@ class RealTimeLoop:
         running: false once the host is shutting down (an error is then no failure).
         inputs: what the log calls each kind's input, e.g. {'omega': 'cmd/omega'}
             (default the kind).
+        ready: called in the loop's thread before the run starts, every READY_WAIT s,
+            until it returns true (e.g. the host's subscribers are there); simulated
+            time starts then (default: at once).
     """
 
     def __init__(self, engine: SimulationEngine, settings: LoopSettings, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
-                 running=None, inputs=None):
+                 running=None, inputs=None, ready=None):
         self.engine = engine
         self.settings = settings
         self._publish = publish
@@ -194,12 +209,15 @@ class RealTimeLoop:
         self.clock = clock or SystemClock()
         self._running = running or (lambda: True)
         self._inputs = {kind: kind for kind in COMMANDS} | dict(inputs or {})
+        self._ready = ready
         self.lock = threading.RLock()
         """Held while the engine or the loop's state changes (re-entrant)."""
         self._stop = threading.Event()
         self.paused = False
         self.overruns = 0
         """Times the thread fell more than MAX_BACKLOG behind and skipped ahead."""
+        self.publications = 0
+        """Samples handed to ``publish`` so far."""
         self.failure: str | None = None
         self._scheduling = scheduling.ThreadScheduling(self._logger, 'physics thread')
         now = self.clock.monotonic()
@@ -212,10 +230,13 @@ class RealTimeLoop:
         self._commands: deque = deque(maxlen=PENDING_COMMANDS)
         self._command_arrived = threading.Event()
         self.dropped_commands = 0
+        self.malformed_commands = 0
+        """Command messages the host could not read as a command (see :meth:`reject`)."""
         self._drops_logged = 0
         self._timeouts_logged = engine.timeouts
         self._last_level: int | None = None
         self._next_status = 0.0
+        self._next_level_check = 0.0
         self._quiet_until: dict = {}
         self._thread: threading.Thread | None = None
 
@@ -251,6 +272,12 @@ class RealTimeLoop:
         return min(LEAD, 0.25 * self.settings.publish_period / self.settings.real_time_factor)
 
     @property
+    def _spin(self) -> float:
+        """SPIN, or 0 while a CPU wake-up latency of at most SLEEP_ONLY_LATENCY is held."""
+        held = self._scheduling.cpu_latency
+        return 0.0 if held is not None and held <= SLEEP_ONLY_LATENCY else SPIN
+
+    @property
     def _marker_every(self) -> int:
         return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
 
@@ -278,6 +305,15 @@ class RealTimeLoop:
         self._commands.append((kind, value, self.clock.monotonic(),
                                source or self._inputs[kind]))
         self._command_arrived.set()
+
+    def reject(self, source: str, reason: str) -> None:
+        """A command message from ``source`` that could not be read (any thread).
+
+        Counted and logged with its reason, throttled per source (at most once a
+        wall second); nothing else changes.
+        """
+        self.malformed_commands += 1
+        self._log('warning', f'{source} rejected: {reason}', 'rejected ' + source, 1.0)
 
     def _command_time(self, arrived: float) -> float | None:
         """Simulated time at which a command arrived at ``arrived`` takes effect, or None.
@@ -390,6 +426,11 @@ class RealTimeLoop:
             return 'already ' + ('paused' if self.paused else 'running')
 
     # ----------------------------------------------------------------- the thread
+    @property
+    def running(self) -> bool:
+        """Whether the loop's thread is to go on (not stopped)."""
+        return not self._stop.is_set()
+
     def start(self) -> None:
         """Start the loop's thread; simulated time starts from now."""
         with self.lock:
@@ -435,11 +476,14 @@ class RealTimeLoop:
             # what the samples were computed with, also if a service or a parameter
             # change replaces it while they are being published
             context = self.settings, self.engine.config, self._snapshot()
+        spin = self._spin
         for sample in samples:
-            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop):
+            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop,
+                                                                     spin):
                 return False
             self._published = (sample.time, self.clock.monotonic())
             self._publish(sample, *context)
+            self.publications += 1
         self.report()
         # the next tick is due at an absolute time: the publication's wait and the work
         # after it (estimate, status) must not delay it
@@ -469,6 +513,11 @@ class RealTimeLoop:
         tick is due (None: at once).
         """
         eng = self.engine
+        if self._ready is not None:
+            if not self._ready():
+                return [], self.clock.monotonic() + READY_WAIT
+            self._ready = None                  # started: simulated time runs from now
+            self._restart_clock()
         if self.paused or eng.halted:
             return [], self.clock.monotonic() + IDLE_WAIT
         pacer = self._pacer
@@ -533,7 +582,15 @@ class RealTimeLoop:
 
     # ----------------------------------------------------------------- status
     def report(self, force: bool = False) -> None:
-        """Send a :class:`Status` if the level changed, it is due, or ``force``."""
+        """Send a :class:`Status` if the level changed, it is due, or ``force``.
+
+        The level is looked at most every LEVEL_CHECK wall seconds (as fast as
+        possible a cycle is one publication: thousands a second).
+        """
+        now = self.clock.monotonic()
+        if not force and now < self._next_level_check and now < self._next_status:
+            return
+        self._next_level_check = now + LEVEL_CHECK
         with self.lock:
             health = self.engine.health()
             level, message = health.level, health.message
@@ -548,7 +605,8 @@ class RealTimeLoop:
             self._next_status = now + 1.0 / self.settings.diagnostics_rate
             values = (*health.values, ('paused', self.paused),
                       ('real_time_factor', self.settings.real_time_factor),
-                      ('overruns', self.overruns),
-                      ('dropped_commands', self.dropped_commands))
+                      ('overruns', self.overruns), ('publications', self.publications),
+                      ('dropped_commands', self.dropped_commands),
+                      ('malformed_commands', self.malformed_commands))
             stamp = self._stamps.stamp(self.engine.time)
         self._publish_status(Status(stamp, level, message, values))

@@ -170,6 +170,11 @@ class ThreadScheduling:
         self._latency = CpuLatencyRequest(device)
         self._latency_refused = False
 
+    @property
+    def cpu_latency(self) -> int | None:
+        """The CPU wake-up latency request held, us (None: none)."""
+        return self._latency.microseconds
+
     def update(self, priority: int, cpu_latency: int) -> bool:
         """Run at ``priority`` (0: ordinary) and hold ``cpu_latency`` us (-1: none).
 

@@ -26,6 +26,8 @@ SPOKE_COLOR = (0.15, 0.15, 0.2, 1.0)
 ROD_COLOR = (0.2, 0.4, 0.9, 1.0)
 MASS_COLOR = (0.9, 0.3, 0.1, 1.0)
 TRAIL_COLOR = (0.9, 0.6, 0.1, 0.8)
+TRAIL_ID = 4
+"""The trail's shape id (its points recur from one frame to the next)."""
 
 
 class Shape(NamedTuple):
@@ -73,6 +75,6 @@ def scene(*, disk_radius: float, theta: float, rod: Sequence[Sequence[float]],
     ]
     trail = tuple(_xyz(p) for p in trail)
     if len(trail) >= 2:
-        shapes.append(Shape(4, 'line_strip', (0.0, 0.0, 0.0), (TRAIL_WIDTH, 0.0, 0.0),
+        shapes.append(Shape(TRAIL_ID, 'line_strip', (0.0, 0.0, 0.0), (TRAIL_WIDTH, 0.0, 0.0),
                             TRAIL_COLOR, trail))
     return shapes

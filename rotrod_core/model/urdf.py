@@ -14,13 +14,19 @@ joints' limits, which URDF requires of prismatic joints, are +-l (far beyond the
 simulator's halt at ``max_deflection_ratio`` x l, 0.1 l by default); their effort
 limit is 0 (passive joints); their velocity limit is w0 l, the speed of a free
 vibration l in amplitude (indicative: nothing enforces it).
+
+With a :class:`Ros2Control`, the URDF also has a ``<ros2_control>`` block for
+``topic_based_ros2_control``'s ``TopicBasedSystem``: the controller manager then
+drives the simulator over its ``joint_command`` topic and reads its ``joint_states``
+(docs/ros_integration.md).
 """
 
 from __future__ import annotations
 
 import fnmatch
+from dataclasses import dataclass
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
+from xml.sax.saxutils import escape, quoteattr
 
 from rotrod_core.model.geometry import sphere_radius
 from rotrod_core.model.interface import (
@@ -47,6 +53,84 @@ ROD_PARAM_NAMES = ('mass', 'rod_length', 'rod_diameter', 'youngs_modulus', 'ecce
 SIMULATOR_NODE = 'rotrod_simulator'
 
 
+TOPIC_BASED_SYSTEM = 'topic_based_ros2_control/TopicBasedSystem'
+"""The hardware interface plugin that talks to a simulator over topics."""
+HUB_COMMAND_INTERFACES = ('velocity', 'effort')
+"""Command interfaces the hub can have: velocity (drive velocity), effort (drive torque)."""
+
+
+@dataclass(frozen=True)
+class Ros2Control:
+    """A ``<ros2_control>`` block for ``TopicBasedSystem`` (topic names are absolute).
+
+    Attributes:
+        command_interfaces: the hub's, a non-empty subset of
+            :data:`HUB_COMMAND_INTERFACES` ('velocity' for drive velocity, 'effort'
+            for drive torque; both to switch controllers with the drive).
+        joint_commands_topic: where the interface publishes: the simulator's
+            ``joint_command`` (e.g. ``/rotrod/joint_command`` for a simulator in
+            namespace ``/rotrod``).
+        joint_states_topic: where it reads the joints: the simulator's ``joint_states``.
+        trigger_joint_command_threshold: the interface publishes a command only when the
+            summed |position state - position command| exceeds this; with no position
+            command interface that sum is |theta|, 0 at rest, so the default -1 (always
+            publish) is needed for the first command to be sent at all.
+        name: the block's (hardware component's) name.
+    """
+
+    command_interfaces: tuple = ('velocity',)
+    joint_commands_topic: str = '/rotrod/joint_command'
+    joint_states_topic: str = '/rotrod/joint_states'
+    trigger_joint_command_threshold: float = -1.0
+    name: str = ROBOT_NAME
+
+    def __post_init__(self):
+        given = tuple(self.command_interfaces)
+        if not given or len(set(given)) != len(given) or not set(given) <= set(
+                HUB_COMMAND_INTERFACES):
+            raise ValueError(f'command_interfaces must be distinct names among '
+                             f'{HUB_COMMAND_INTERFACES}, got {self.command_interfaces!r}')
+        object.__setattr__(self, 'command_interfaces', given)
+        for name in ('joint_commands_topic', 'joint_states_topic'):
+            topic = getattr(self, name)
+            if not (isinstance(topic, str) and topic.startswith('/') and len(topic) > 1
+                    and not any(c.isspace() for c in topic)):
+                raise ValueError(f'{name} must be an absolute topic name, got {topic!r}')
+        if not self.name or any(c.isspace() for c in self.name):
+            raise ValueError(f'name must be a non-empty word, got {self.name!r}')
+
+
+def ros2_control_block(options: Ros2Control) -> str:
+    """The ``<ros2_control>`` element (XML text, indented for the robot element).
+
+    Joint ``hub``: the command interfaces asked for; state interfaces position (theta,
+    rad), velocity (w, rad/s), effort (hub torque, N m). The tip joints (passive):
+    state interfaces position and velocity (u, v m; u', v' m/s), no command interface,
+    so ``joint_state_broadcaster`` republishes them for ``/tf`` and the interface's
+    commands carry one entry per field, the hub's.
+    """
+    params = (('joint_commands_topic', options.joint_commands_topic),
+              ('joint_states_topic', options.joint_states_topic),
+              ('trigger_joint_command_threshold', f'{options.trigger_joint_command_threshold:g}'))
+    lines = [f'  <ros2_control name={quoteattr(options.name)} type="system">',
+             '    <hardware>',
+             f'      <plugin>{TOPIC_BASED_SYSTEM}</plugin>',
+             *(f'      <param name="{k}">{escape(v)}</param>' for k, v in params),
+             '    </hardware>',
+             f'    <joint name="{HUB_JOINT}">',
+             *(f'      <command_interface name="{c}"/>' for c in options.command_interfaces),
+             *(f'      <state_interface name="{s}"/>' for s in ('position', 'velocity',
+                                                                  'effort')),
+             '    </joint>']
+    for joint in (TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT):
+        lines += [f'    <joint name="{joint}">',
+                  '      <state_interface name="position"/>',
+                  '      <state_interface name="velocity"/>',
+                  '    </joint>']
+    lines.append('  </ros2_control>')
+    return '\n'.join(lines) + '\n'
+
+
 def _num(x) -> str:
     """A float as the shortest text that reads back as the same double."""
     return repr(float(x))
@@ -60,11 +144,14 @@ def _rgba(color) -> str:
     return ' '.join(f'{c:g}' for c in color)
 
 
-def urdf_text(params: RodParams, *, disk_radius: float = DEFAULT_HUB_RADIUS) -> str:
+def urdf_text(params: RodParams, *, disk_radius: float = DEFAULT_HUB_RADIUS,
+              ros2_control: Ros2Control | None = None) -> str:
     """The URDF (XML text) of one rod: world, disk (``rotor``), rod, tip joints, mass.
 
     ``disk_radius`` (m) is the drawn disk's, as the simulator's ``disk_radius``
-    parameter. Raises ValueError for a batch of parameters (one URDF, one rod).
+    parameter; with ``ros2_control``, the URDF ends with that ``<ros2_control>`` block
+    (:func:`ros2_control_block`). Raises ValueError for a batch of parameters (one
+    URDF, one rod).
     """
     if params.is_batch:
         raise ValueError('urdf_text describes one rod: RodParams holds a batch')
@@ -148,7 +235,7 @@ def urdf_text(params: RodParams, *, disk_radius: float = DEFAULT_HUB_RADIUS) -> 
     <axis xyz="0 1 0"/>
     {tip_limit(TIP_TANGENTIAL_JOINT)}
   </joint>
-</robot>
+{'' if ros2_control is None else chr(10) + ros2_control_block(ros2_control)}</robot>
 '''
 
 
