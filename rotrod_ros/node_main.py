@@ -21,9 +21,9 @@ def make_executor(name: str, logger, context=None):
     if name == 'events':
         from rclpy.experimental import EventsExecutor
         logger.warning(
-            'executor=events: the experimental EventsExecutor busy-waits on a full core and '
-            'does not stop on SIGINT here (bench/bench_realtime.py); single_threaded is '
-            'the measured better choice')
+            'executor=events: rclpy\'s EventsExecutor is experimental (its spin() was '
+            'measured busy-waiting on a full core; bench/bench_realtime.py measures it); '
+            'single_threaded is the default')
         return EventsExecutor(context=context)
     return SingleThreadedExecutor(context=context)
 
