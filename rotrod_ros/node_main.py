@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
@@ -21,9 +21,9 @@ def make_executor(name: str, logger, context=None):
     if name == 'events':
         from rclpy.experimental import EventsExecutor
         logger.warning(
-            'executor=events: the experimental EventsExecutor busy-waits on a full core and '
-            'does not stop on SIGINT here (bench/bench_realtime.py); single_threaded is '
-            'the measured better choice')
+            'executor=events: rclpy\'s EventsExecutor is experimental (its spin() was '
+            'measured busy-waiting on a full core; bench/bench_realtime.py measures it); '
+            'single_threaded is the default')
         return EventsExecutor(context=context)
     return SingleThreadedExecutor(context=context)
 
@@ -75,6 +75,10 @@ def _wake_on_signals(node) -> None:
     threading.Thread(target=watch, name='signal_wakeup', daemon=True).start()
 
 
+def _never(node) -> bool:
+    return False
+
+
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *, make_executor: Callable | None = None,
         until: Callable | None = None, started: Callable | None = None,
@@ -92,7 +96,8 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         finished: called with the node after spinning (also on a signal).
         own_signals: SIGINT and SIGTERM end the spin with the context still up, so
             ``finished`` can still publish and wait for acknowledgements (Python's
-            handlers, woken through a pipe: :func:`_wake_on_signals`).
+            handlers, woken through a pipe: :func:`_wake_on_signals`; with an executor
+            without guard conditions, the spin wakes every 0.1 s instead).
 
     SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
     ``own_signals``); an error raised by rclpy while the context is shutting down is
@@ -116,7 +121,10 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         executor = (make_executor or (lambda n: SingleThreadedExecutor()))(node)
         executor.add_node(node)
         if own_signals:
-            _wake_on_signals(node)
+            if isinstance(executor, Executor):
+                _wake_on_signals(node)
+            elif until is None:      # rclpy's C++ EventsExecutor has no guard conditions
+                until = _never       # so the spin polls (spin_once below)
         if started:
             started(node)
         try:
