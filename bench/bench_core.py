@@ -12,10 +12,8 @@ the rows (bench/results.py).
 
 import argparse
 import os
-import platform
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
@@ -254,13 +252,7 @@ def main():
     ap.add_argument('--json', type=Path, help='write the rows as JSON here')
     args = ap.parse_args()
     rows = measure(quick=args.quick)
-    stamp = (f'{platform.node()} ({platform.machine()}, {platform.python_implementation()} '
-             f'{platform.python_version()}), {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC')
-    print(f'rotrod_core benchmark on {stamp}\n')
-    print(results.markdown(rows, bench_column=False))
-    if args.json:
-        results.dump(args.json, rows, stamp=stamp)
-    return 0 if all(r.met is not False for r in rows) else 1
+    return results.report(rows, args.json, title='rotrod_core benchmark', stamp=results.host())
 
 
 if __name__ == '__main__':

@@ -21,10 +21,8 @@ import argparse
 import gc
 import math
 import os
-import platform
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 # Small matrices: BLAS threads only add hand-over costs (ESPRIT's SVD took 10x longer
@@ -291,18 +289,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--json', type=Path, help='write the rows as JSON here')
     args = ap.parse_args()
-    load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    load = os.getloadavg()
     rows = measure()
-    stamp = (f'{platform.node()} ({platform.machine()}, {os.cpu_count()} CPUs, load {load}, '
-             f'{platform.python_implementation()} {platform.python_version()}), '
-             f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC')
-    print(f'whirl estimator benchmark on {stamp}\n')
-    print('Value: the ML estimator (rotrod_core.estimation.whirl); '
-          'compared: the baselines on the same windows.\n')
-    print(results.markdown(rows, bench_column=False))
-    if args.json:
-        results.dump(args.json, rows, stamp=stamp)
-    return 0 if all(r.met is not False for r in rows) else 1
+    return results.report(rows, args.json, title='whirl estimator benchmark',
+                          stamp=results.host(load),
+                          preface='Value: the ML estimator (rotrod_core.estimation.whirl); '
+                                  'compared: the baselines on the same windows.')
 
 
 if __name__ == '__main__':

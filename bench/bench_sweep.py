@@ -125,11 +125,7 @@ def main():
     ap.add_argument('--quick', action='store_true', help='4096 runs instead of 16384')
     ap.add_argument('--json', type=Path, help='write the rows as JSON here')
     args = ap.parse_args()
-    rows = measure(quick=args.quick)
-    print(results.markdown(rows, bench_column=False))
-    if args.json:
-        results.dump(args.json, rows)
-    return 0 if all(r.met is not False for r in rows) else 1
+    return results.report(measure(quick=args.quick), args.json)
 
 
 if __name__ == '__main__':

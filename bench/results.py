@@ -12,8 +12,11 @@ from __future__ import annotations
 import json
 import math
 import operator
+import os
+import platform
 import re
 from dataclasses import asdict, dataclass
+from datetime import datetime, timezone
 from pathlib import Path
 
 OPS = {'<=': operator.le, '>=': operator.ge}
@@ -201,3 +204,28 @@ RATIO_NOTE = ('ratio: how many times better the measured value is than the basel
               '(baseline / value where lower is better, value / baseline where higher is '
               'better); below 1 the baseline is better.')
 
+
+def host(load: tuple | None = None) -> str:
+    """This machine and interpreter and the time now (UTC), for a bench's header.
+
+    ``load``: the load averages to show (taken when the caller chose), with the CPUs.
+    """
+    cpus = '' if load is None else (f', {os.cpu_count()} CPUs, load '
+                                    + ', '.join(f'{x:.1f}' for x in load))
+    return (f'{platform.node()} ({platform.machine()}{cpus}, '
+            f'{platform.python_implementation()} {platform.python_version()}), '
+            f'{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC')
+
+
+def report(rows: list, json_path: Path | None = None, *, title: str = '',
+           stamp: str = '', preface: str = '') -> int:
+    """A standalone bench's output: ``title on stamp``, ``preface``, the table, and the rows
+    as JSON if asked. Returns the exit status: 0 when no target is missed, else 1."""
+    if title:
+        print(f'{title} on {stamp}\n' if stamp else f'{title}\n')
+    if preface:
+        print(preface + '\n')
+    print(markdown(rows, bench_column=False))
+    if json_path:
+        dump(json_path, rows, **({'stamp': stamp} if stamp else {}))
+    return 0 if all(r.met is not False for r in rows) else 1
