@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import eq26
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -240,20 +241,6 @@ def test_static_deflection_and_critical_speeds_closed_forms(g, rho):
 
 
 # --------------------------------------------------------------- integrations
-def eq26(t, W=2.0, T=15.0):
-    """MODEL.md's Eq. 26: (w, w')."""
-    if t <= T:
-        return W * (t / T - math.sin(2 * math.pi * t / T) / (2 * math.pi)), \
-            W / T * (1 - math.cos(2 * math.pi * t / T))
-    if t <= 4 * T / 3:
-        return W, 0.0
-    if t <= 7 * T / 3:
-        s = t - 4 * T / 3
-        return W * (1 - s / T + math.sin(2 * math.pi * s / T) / (2 * math.pi)), \
-            W / T * (-1 + math.cos(2 * math.pi * s / T))
-    return 0.0, 0.0
-
-
 def ritz_rhs(k, mass, m_ecc, r0=R0):
     """Rotating-frame Lagrange equations of rod + tip mass, one mode (derived here):
 
