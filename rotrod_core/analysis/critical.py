@@ -22,6 +22,7 @@ import numpy as np
 
 from rotrod_core.command.profiles import Profile
 from rotrod_core.model.params import RodParams
+from rotrod_core.numerics.checks import finite_array
 from rotrod_core.offline.simulate import simulate
 
 STARTS = ('quasi_static', 'step', 'impulsive')
@@ -30,12 +31,9 @@ STARTS = ('quasi_static', 'step', 'impulsive')
 def _limit(deflection_limit):
     if isinstance(deflection_limit, bool):
         raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}')
-    try:
-        d = np.asarray(deflection_limit, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f'deflection_limit must be a number, got {deflection_limit!r}') from None
-    if not np.all(np.isfinite(d) & (d > 0)):
-        raise ValueError(f'deflection_limit must be finite and > 0 m, got {deflection_limit!r}')
+    d = finite_array('deflection_limit', deflection_limit)
+    if not np.all(d > 0):
+        raise ValueError(f'deflection_limit must be > 0 m, got {deflection_limit!r}')
     return d
 
 
