@@ -289,7 +289,9 @@ def cmd_demo(args) -> int:
         from rotrod_core.reporting.spin_ups import PLANNED
         label, options = PLANNED[-1]
         profile = profile_from_options('planned', options, params)
-        run = simulate(params, profile, profile.end_time + 5.0, dt=1e-3)
+        end_time = profile.end_time
+        assert end_time is not None     # a planned spin-up is constant after its end
+        run = simulate(params, profile, end_time + 5.0, dt=1e-3)
         path = run.save(out / 'planned_run.csv')
         print(f'rotrod demo: {label}, Table 1, offline core run')
         print(describe(profile, options)[0])

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import BSpline
@@ -192,7 +193,7 @@ def whirl_residual(params: RodParams, omega: float, u, v, du, dv) -> float:
     return float(np.sum(np.abs(s.rows @ e)))
 
 
-def fitted_whirl_residual(params: RodParams, omega: float, t, u, v) -> tuple:
+def fitted_whirl_residual(params: RodParams, omega: float, t, u, v) -> tuple[float, float]:
     """Free-whirl amplitude (m) of a measured motion at constant ``omega``, and the misfit.
 
     The motion (``t`` s, ``u``, ``v`` m; e.g. published after a spin-up) is fitted by
@@ -435,7 +436,7 @@ class _Problem:
         Gauss-Newton first; if that stalls close enough to the aim, SLSQP minimises
         the largest residual (epigraph form) and stops at the first feasible iterate.
         """
-        cache = {}
+        cache: dict[bytes, tuple[np.ndarray, ...]] = {}
 
         def ev(z):
             key = z[:-1].tobytes()      # the evaluation does not depend on the slack
@@ -459,7 +460,7 @@ class _Problem:
             return np.r_[np.c_[-dres / aim, np.ones(len(res))],
                          np.c_[-dr2[at] / d2, np.zeros(len(at))]]
 
-        constraints = [{'type': 'ineq', 'fun': cons, 'jac': jac}]
+        constraints: list[dict[str, Any]] = [{'type': 'ineq', 'fun': cons, 'jac': jac}]
         if self.max_acc is not None:
             A = self.diff[:, self.free] * self.dw / T
             a0 = self.diff @ self.control_points(np.zeros(self.n_free)) / T
@@ -542,7 +543,7 @@ def _bounded_least_squares(J, rhs, C, c, bounds, rounds=6):
     Rows of C that a solution breaks join the least-squares problem as heavily
     weighted equations C_i d = c_i (they would be active), until none is broken.
     """
-    weight = 1e4 * max(np.linalg.norm(J), 1.0)
+    weight = 1e4 * max(float(np.linalg.norm(J)), 1.0)
     active = np.flatnonzero(c < 0)
     lower, upper = bounds
     lower = np.minimum(lower, 0.0)
@@ -664,7 +665,7 @@ class _Family:
         self.args = (params, ws, wf, limit, residual)
         self.params, self.ws, self.wf, self.limit, self.residual = self.args
         self.eps, self.max_acc = robust, max_acc
-        self.extra = []         # band frequencies added by the final checks
+        self.extra: list[float] = []   # band frequencies added by the final checks
         self.steps = STEPS_PER_KNOT
         self.min_free = MIN_FREE + (2 if robust else 0)
         w0 = min(float(params.natural_frequency_radial),
@@ -685,7 +686,7 @@ class _Family:
             self._problems[key] = _Problem(*self.args, scales, self.max_acc, n_free, steps)
         return self._problems[key]
 
-    def scales(self, T: float) -> list:
+    def scales(self, T: float) -> list[float]:
         """Natural-frequency factors optimised at duration T, nominal first.
 
         The residual, as a function of w0, oscillates about once per 2 pi / T: the

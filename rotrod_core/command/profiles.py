@@ -69,11 +69,11 @@ def _require_finite(where: str, what: str, value: float) -> None:
 class Profile:
     """Base class of angular-velocity profiles."""
 
-    def jumps(self) -> tuple:
+    def jumps(self) -> tuple[tuple[float, float, float], ...]:
         """Instants where w jumps, as ``(time s, w before, w after)`` triples (t > 0)."""
         return ()
 
-    def breakpoints(self) -> tuple:
+    def breakpoints(self) -> tuple[float, ...]:
         """Instants t > 0 where w or one of its first derivatives is not smooth, s.
 
         Integrators that take large steps put a node on each (a step across one would
@@ -184,7 +184,7 @@ class Eq26Profile(Profile):
         """7T/3, s."""
         return 7.0 * self.period / 3.0
 
-    def breakpoints(self) -> tuple:
+    def breakpoints(self) -> tuple[float, ...]:
         """The joints T, 4T/3 and 7T/3 (the third derivative of w jumps there), s."""
         T = self.period
         return (T, 4.0 * T / 3.0, 7.0 * T / 3.0)
@@ -265,7 +265,7 @@ class StepProfile(Profile):
         set_(self, 't_step', _finite('StepProfile', 't_step', self.t_step, nonnegative=True))
         set_(self, 'omega_start', _finite('StepProfile', 'omega_start', self.omega_start))
 
-    def jumps(self) -> tuple:
+    def jumps(self) -> tuple[tuple[float, float, float], ...]:
         """The step, when it happens after the start and changes w."""
         if self.t_step > 0 and self.omega_target != self.omega_start:
             return ((self.t_step, self.omega_start, self.omega_target),)
@@ -368,7 +368,7 @@ class RampProfile(Profile):
         """End of the ramp, s."""
         return self.t_start + self.ramp_time
 
-    def breakpoints(self) -> tuple:
+    def breakpoints(self) -> tuple[float, ...]:
         """Start and end of the ramp (the acceleration jumps there), s."""
         return tuple(t for t in (self.t_start, self.end_time) if t > 0)
 
@@ -573,7 +573,7 @@ class TableProfile(Profile):
         """Last table time, s."""
         return float(self.times[-1])
 
-    def breakpoints(self) -> tuple:
+    def breakpoints(self) -> tuple[float, ...]:
         """The table's times (PCHIP's second derivative jumps there), s."""
         return tuple(float(t) for t in self.times if t > 0)
 
@@ -724,7 +724,7 @@ class SpinUpProfile(Profile):
         """
         d2 = self._dw.derivative()
         knots = np.unique(self._w.t)
-        x = [knots]
+        x: list[np.ndarray | list[float]] = [knots]
         for a, b in zip(knots[:-1], knots[1:]):
             ya, yb = d2(a + 1e-15 * (b - a)), d2(b - 1e-15 * (b - a))
             if ya * yb < 0:
@@ -743,7 +743,7 @@ class SpinUpProfile(Profile):
         """``t_start + duration``, s."""
         return self.t_start + self.duration
 
-    def breakpoints(self) -> tuple:
+    def breakpoints(self) -> tuple[float, ...]:
         """The spline's knots in time (its third derivative jumps there), s."""
         return tuple(float(x) * self.duration for x in np.unique(self._w.t) if x > 0)
 

@@ -272,10 +272,12 @@ class OmegaSetpointShaper:
         """Hold ``omega`` (rad/s) from ``time`` (s) on; forget the stream."""
         w, t = _omega('omega', omega), finite_number('time', time)
         self._ramps = [Ramp((t, t), (w, w))]
-        self._last_arrival = None
-        self._recent: deque = deque(maxlen=3)   # (due time, setpoint) of the latest ones
+        self._last_arrival: float | None = None
+        # (due time, setpoint) of the latest ones
+        self._recent: deque[tuple[float, float]] = deque(maxlen=3)
         self._envelope.clear()
-        self._grid = None       # grid time of the latest setpoint of an established stream
+        # grid time of the latest setpoint of an established stream
+        self._grid: float | None = None
         self.interval = self.nominal_interval
         self.setpoint = w
         self.late_setpoints = 0

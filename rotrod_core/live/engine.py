@@ -217,7 +217,7 @@ class EngineConfig:
         set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
         if self.drive == 'torque':
             check_rotary_inertia(self.params, self.coupling, state)
-        if abs(state.omega) > self.max_omega:
+        if abs(float(state.omega)) > self.max_omega:
             raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
                              f'{self.max_omega:g} rad/s')
         r = math.hypot(state.u, state.v)
@@ -316,7 +316,7 @@ class SimulationEngine:
         cfg = self.config
         self._shaper = OmegaSetpointShaper(cfg.max_angular_acceleration,
                                            delay=cfg.setpoint_delay,
-                                           omega=self.state.omega, time=self.time)
+                                           omega=float(self.state.omega), time=self.time)
         self._torque_schedule: deque = deque()
         self.torque_command = 0.0
         st = self._stepper
@@ -501,7 +501,7 @@ class SimulationEngine:
         self._check_timeout(t0, dt)
         try:
             if cfg.drive == 'velocity':
-                omega_dot = (self._shaper.omega(t0 + dt) - before.omega) / dt
+                omega_dot = (self._shaper.omega(t0 + dt) - float(before.omega)) / dt
                 state = stepper.step_velocity(omega_dot)
             else:
                 while self._torque_schedule and self._torque_schedule[0][0] <= t0 + 0.5 * dt:
@@ -517,7 +517,7 @@ class SimulationEngine:
                        f'{cfg.max_deflection * 1e3:.4g} mm (max_deflection_ratio '
                        f'{cfg.max_deflection_ratio:g} x rod length; small-deflection model) '
                        f'at t = {t0 + dt:.4f} s')
-        elif abs(state.omega) > cfg.max_omega:
+        elif abs(float(state.omega)) > cfg.max_omega:
             problem = (f'|omega| {abs(state.omega):.4g} rad/s beyond max_omega '
                        f'{cfg.max_omega:.4g} rad/s at t = {t0 + dt:.4f} s')
         if problem:
@@ -627,7 +627,7 @@ class SimulationEngine:
         """
         cfg, s = self.config, self.state
         r = self.deflection
-        w = abs(s.omega)
+        w = abs(float(s.omega))
         values = (('time_s', self.time), ('omega_rad_s', s.omega), ('u_m', s.u), ('v_m', s.v),
                   ('deflection_m', r), ('deflection_limit_m', cfg.deflection_limit),
                   ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
@@ -670,7 +670,7 @@ class SimulationEngine:
                 warnings.append(f'|omega| {w:.4g} rad/s within {cfg.critical_margin:.0%} of '
                                 f'the critical speed {wc:.4g} rad/s '
                                 f'({name.replace("_", " ")})')
-        if not self.stable_at(s.omega):
+        if not self.stable_at(float(s.omega)):
             warnings.append(f'omega {s.omega:.4g} rad/s is in an unstable range: '
                             'the free vibration grows')
         if errors:

@@ -33,7 +33,7 @@ include the axial load of gravity (:attr:`RodParams.stiffness_radial`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, TypeAlias
 
 import numpy as np
 
@@ -42,21 +42,24 @@ from rotrod_core.numerics.checks import finite_array, finite_number
 
 COUPLINGS = ('exact', 'paper')
 
+Real: TypeAlias = float | np.ndarray
+"""A float for a single system, an array for a batch (the same arithmetic serves both)."""
+
 
 class State(NamedTuple):
     """Full state of the system (SI units; arrays allowed for batches)."""
 
-    u: float
+    u: Real
     """Radial deflection of the mass, m (rotating frame, e1)."""
-    v: float
+    v: Real
     """Tangential deflection of the mass, m (rotating frame, e2)."""
-    du: float
+    du: Real
     """Radial deflection rate u', m/s."""
-    dv: float
+    dv: Real
     """Tangential deflection rate v', m/s."""
-    theta: float
+    theta: Real
     """Hub angle, rad."""
-    omega: float
+    omega: Real
     """Hub angular velocity, rad/s."""
 
 
@@ -69,7 +72,7 @@ def make_state(initial: dict | None = None, *, scalar: bool = False, **defaults)
     Values may be arrays (a batch) unless ``scalar``. Raises ValueError for an unknown
     name or a value that is not a finite number (booleans and strings included).
     """
-    values = dict.fromkeys(STATE_FIELDS, 0.0)
+    values: dict[str, Real] = dict.fromkeys(STATE_FIELDS, 0.0)
     values.update(defaults)
     for name, value in (initial or {}).items():
         if name not in values:
@@ -84,7 +87,7 @@ def make_state(initial: dict | None = None, *, scalar: bool = False, **defaults)
     return State(**values)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Coefficients:
     """Coefficients of the equations, taken from :class:`RodParams`.
 
@@ -93,48 +96,52 @@ class Coefficients:
     docstring); for the paper's massless rod these are m, r0 and J exactly.
     """
 
-    mass: float
+    mass: Real
     """Tip mass m, kg."""
-    eccentricity: float
+    eccentricity: Real
     """r0 (the rod root's radius: where the undeflected mass stands), m."""
-    hub_inertia: float
+    hub_inertia: Real
     """J, kg m^2 (the hub alone)."""
-    k1: float
+    k1: Real
     """Radial tip stiffness (with the axial load of gravity), N/m."""
-    k2: float
+    k2: Real
     """Tangential tip stiffness (with the axial load of gravity), N/m."""
-    c1: float
+    c1: Real
     """Radial damping coefficient, N s/m."""
-    c2: float
+    c2: Real
     """Tangential damping coefficient, N s/m."""
-    w1sq: float
+    w1sq: Real
     """k1/M, 1/s^2."""
-    w2sq: float
+    w2sq: Real
     """k2/M, 1/s^2."""
-    g1: float
+    g1: Real
     """c1/M, 1/s."""
-    g2: float
+    g2: Real
     """c2/M, 1/s."""
-    modal_mass: float = None
+    modal_mass: Real
     """M = m + (33/140) rho A l, kg (m for a massless rod)."""
-    eccentric_mass: float = None
+    eccentric_mass: Real
     """Me = m + (3/8) rho A l, kg (m for a massless rod)."""
-    load_radius: float = None
+    load_radius: Real
     """re = (Me / M) r0, m: where a point mass M would feel the same eccentric loads."""
-    rotor_inertia: float = None
+    rotor_inertia: Real
     """Je = J + r0^2 (m + rho A l - Me^2 / M) >= J, kg m^2."""
 
-    def __post_init__(self):
+    def __init__(self, mass: Real, eccentricity: Real, hub_inertia: Real, k1: Real, k2: Real,
+                 c1: Real, c2: Real, w1sq: Real, w2sq: Real, g1: Real, g2: Real,
+                 modal_mass: Real | None = None, eccentric_mass: Real | None = None,
+                 load_radius: Real | None = None, rotor_inertia: Real | None = None) -> None:
         # a massless rod unless told otherwise (M = m, re = r0, Je = J)
         set_ = object.__setattr__
-        if self.modal_mass is None:
-            set_(self, 'modal_mass', self.mass)
-        if self.eccentric_mass is None:
-            set_(self, 'eccentric_mass', self.mass)
-        if self.load_radius is None:
-            set_(self, 'load_radius', self.eccentricity)
-        if self.rotor_inertia is None:
-            set_(self, 'rotor_inertia', self.hub_inertia)
+        for name, value in (('mass', mass), ('eccentricity', eccentricity),
+                            ('hub_inertia', hub_inertia), ('k1', k1), ('k2', k2), ('c1', c1),
+                            ('c2', c2), ('w1sq', w1sq), ('w2sq', w2sq), ('g1', g1), ('g2', g2),
+                            ('modal_mass', mass if modal_mass is None else modal_mass),
+                            ('eccentric_mass', mass if eccentric_mass is None else eccentric_mass),
+                            ('load_radius', eccentricity if load_radius is None else load_radius),
+                            ('rotor_inertia',
+                             hub_inertia if rotor_inertia is None else rotor_inertia)):
+            set_(self, name, value)
 
     @classmethod
     def from_params(cls, params: RodParams) -> Coefficients:
@@ -299,8 +306,8 @@ def rotating_frame_matrix(co: Coefficients, omega, omega_dot):
     A[..., 1, 3] = 1.0
     f0u, f0v = deflection_accelerations(co, 0.0, 0.0, 0.0, 0.0, omega, omega_dot)
     A[..., 2, 4], A[..., 3, 4] = f0u, f0v
-    for j, unit in enumerate(np.eye(4)):
-        fu, fv = deflection_accelerations(co, *unit, omega, omega_dot)
+    for j, (u, v, du, dv) in enumerate(np.eye(4)):
+        fu, fv = deflection_accelerations(co, u, v, du, dv, omega, omega_dot)
         A[..., 2, j] = fu - f0u
         A[..., 3, j] = fv - f0v
     return A

@@ -293,7 +293,7 @@ class RodParams:
                  or np.any(np.asarray(getattr(self, f)) != 0)]
         return ', '.join(f'{f}={getattr(self, f)!r}' for f in shown)
 
-    def _numeric(self) -> dict:
+    def _numeric(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                 if f.name != 'section' and getattr(self, f.name) is not None}
 
@@ -302,7 +302,7 @@ class RodParams:
         return dataclasses.replace(self, **changes)
 
     @property
-    def shape(self) -> tuple:
+    def shape(self) -> tuple[int, ...]:
         """Broadcast shape of the array fields; () for a single system."""
         return np.broadcast_shapes(*(np.shape(v) for v in self._numeric().values()))
 
@@ -530,7 +530,7 @@ class RodParams:
         changes = {}
         for name, value in self._numeric().items():
             changes[name] = float(np.broadcast_to(value, shape)[index])
-        return dataclasses.replace(self, **changes)
+        return self.replace(**changes)
 
 
 FIELDS = tuple(FieldInfo(f.name, f.default, **f.metadata[_INFO])

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:
+    import numpy as np
 
 DISK_THICKNESS = 0.01
 """Thickness of the drawn disk, m; its top face is at z = 0, where the rod stands."""
@@ -52,7 +55,7 @@ def _xyz(p) -> tuple:
     return float(p[0]), float(p[1]), float(p[2])
 
 
-def scene(*, disk_radius: float, theta: float, rod: Sequence[Sequence[float]],
+def scene(*, disk_radius: float, theta: float, rod: Sequence[Sequence[float]] | np.ndarray,
           rod_diameter: float, mass_radius: float,
           trail: Iterable[Sequence[float]]) -> list:
     """The shapes of one frame: disk, spoke, rod, mass and (from two points on) trail.

@@ -130,6 +130,7 @@ def _run_chunk(co, n, t, profile, torque, coupling, init, record_every):
                     state = list(model.omega_jump(co, model.State(*state), state[5] + dw))
                     state[5] = zeros + profile.omega(t[k + 1])
         else:
+            assert q is not None        # torque drive: exactly one of profile and torque
             state = list(rk4_step(torque_rates, tuple(state), h, q(t[k]), q(tm[k]), q(t[k + 1])))
         d2 = state[0] * state[0] + state[1] * state[1]
         if not np.all(np.isfinite(d2)):
@@ -146,8 +147,7 @@ def flat_coefficients(params: RodParams) -> Coefficients:
     shape = params.shape
     n = int(np.prod(shape)) if shape else 1
     co = Coefficients.from_params(params)
-    return Coefficients(**{k: (None if v is None else
-                               np.broadcast_to(np.asarray(v, float), shape).ravel().copy()
+    return Coefficients(**{k: (np.broadcast_to(np.asarray(v, float), shape).ravel().copy()
                                if shape else np.full(n, float(v)))
                            for k, v in vars(co).items()})
 
@@ -186,10 +186,14 @@ def _shared_array(shape: tuple, dtype) -> np.ndarray:
                          count=int(np.prod(shape))).reshape(shape)
 
 
-_FORKED_JOB = None      # what forked children of velocity_chunk read (set before the fork)
+# what forked children of velocity_chunk read (set before the fork):
+# (co, profile, the_plan, z0, p0, out)
+_FORKED_JOB: tuple[Coefficients, Profile, velocity.VelocityPlan, np.ndarray, np.ndarray,
+                   dict[str, np.ndarray]] | None = None
 
 
 def _run_blocks(blocks):
+    assert _FORKED_JOB is not None, 'velocity_chunk sets _FORKED_JOB before the fork'
     co, profile, the_plan, z0, p0, out = _FORKED_JOB
     with one_blas_thread():
         for b in blocks:
@@ -379,9 +383,9 @@ def _velocity_batch(co_all, n, shape, profile, t_end, dt, init, tolerance, outpu
     final = model.State(out['z'].real.copy(), out['z'].imag.copy(), out['p'].real.copy(),
                         out['p'].imag.copy(), theta, zeros + float(profile.omega(t_end)))
     info = {'integrators': {velocity.KINDS[k]: {'systems': int(np.sum(
-        velocity.system_kinds(co_all) == k)), 'nodes': len(the_plan.nodes[k]),
+        velocity.system_kinds(co_all) == k)), 'nodes': len(nodes),
         'step_s': the_plan.steps[k], 'estimated_error_m': the_plan.estimates[k]}
-        for k in range(3) if the_plan.nodes[k] is not None}, 'tolerance_m': tolerance}
+        for k, nodes in enumerate(the_plan.nodes) if nodes is not None}, 'tolerance_m': tolerance}
     result = BatchResult(peak_deflection=out['peak'], peak_time=out['peak_time'], final=final,
                          shape=shape, method='exponential', info=info)
     if output_times is not None:

@@ -64,9 +64,8 @@ def system_kinds(co: Coefficients) -> np.ndarray:
 
 def as_arrays(co: Coefficients) -> Coefficients:
     """``co`` with every field an array of the batch's length (scalars broadcast)."""
-    n = max(np.size(v) for v in vars(co).values() if v is not None)
-    return Coefficients(**{k: (None if v is None else
-                               np.broadcast_to(np.asarray(v, float), (n,)).copy())
+    n = max(np.size(v) for v in vars(co).values())
+    return Coefficients(**{k: np.broadcast_to(np.asarray(v, float), (n,)).copy()
                            for k, v in vars(co).items()})
 
 
@@ -483,7 +482,7 @@ def representatives(co: Coefficients, z0, p0, limit: int = 12) -> np.ndarray:
 
 
 def choose_step(kind: int, co, profile, points, z0, p0, tolerance: float, h_cap: float,
-                h_start: float) -> tuple:
+                h_start: float) -> tuple[float, float]:
     """The largest step (<= h_cap) whose estimated error on z is below tolerance / 2.
 
     Returns (h, estimated error of the representatives at h, m).
@@ -533,9 +532,9 @@ class VelocityPlan:
     """
 
     output_times: np.ndarray | None
-    nodes: tuple
-    steps: tuple
-    estimates: tuple
+    nodes: tuple[np.ndarray | None, ...]
+    steps: tuple[float | None, ...]
+    estimates: tuple[float | None, ...]
     tolerance: float
 
 
@@ -551,7 +550,9 @@ def plan(co: Coefficients, profile: Profile, t_end: float, tolerance: float,
     n = np.size(co.w1sq)
     z0 = np.broadcast_to(np.asarray(z0, complex), (n,))
     p0 = np.broadcast_to(np.asarray(p0, complex), (n,))
-    nodes, steps, estimates = [None] * 3, [None] * 3, [None] * 3
+    nodes: list[np.ndarray | None] = [None] * 3
+    steps: list[float | None] = [None] * 3
+    estimates: list[float | None] = [None] * 3
     for kind in range(3):
         idx = np.nonzero(kinds == kind)[0]
         if idx.size == 0:
@@ -592,14 +593,14 @@ def _refine_peaks(kind, co, profile, nodes, traj):
     scored[:, 1:][r2[:, 1:] < r2[:, :-1]] = -np.inf     # local maxima of the samples only
     scored[:, :-1][r2[:, :-1] < r2[:, 1:]] = -np.inf
     cols = np.arange(n)
-    cand, keep = [], []
+    candidates, kept = [], []
     for _ in range(min(_PEAK_CANDIDATES, K1)):
         k = np.argmax(scored, axis=1)
-        cand.append(k)
-        keep.append(np.isfinite(scored[cols, k]))
+        candidates.append(k)
+        kept.append(np.isfinite(scored[cols, k]))
         scored[cols, k] = -np.inf
-    best, best_t = r2[cols, cand[0]], nodes[cand[0]]     # the largest sample
-    cand, keep = np.array(cand), np.array(keep)
+    best, best_t = r2[cols, candidates[0]], nodes[candidates[0]]     # the largest sample
+    cand, keep = np.array(candidates), np.array(kept)
     cols = np.broadcast_to(cols, cand.shape)
     k, j = cand[keep], cols[keep]
     zk, pk = traj.at(k, j)
@@ -657,9 +658,9 @@ def run(co: Coefficients, profile: Profile, the_plan: VelocityPlan, z0, p0) -> d
     p0 = np.broadcast_to(np.asarray(p0, complex), (n,))
     out = {'z': np.empty(n, complex), 'p': np.empty(n, complex), 'peak': np.empty(n),
            'peak_time': np.empty(n)}
-    rec = the_plan.output_times is not None
-    if rec:
-        nout = len(the_plan.output_times)
+    output_times = the_plan.output_times
+    if output_times is not None:
+        nout = len(output_times)
         for name in ('u', 'v', 'du', 'dv'):
             out[name] = np.empty((n, nout))
     for kind in range(3):
@@ -679,8 +680,8 @@ def run(co: Coefficients, profile: Profile, the_plan: VelocityPlan, z0, p0) -> d
         if not np.all(np.isfinite(peak)):
             raise NonFiniteStateError('the velocity-drive batch produced non-finite values')
         out['peak'][idx], out['peak_time'][idx] = peak, peak_time
-        if rec:
-            at = np.searchsorted(nodes, the_plan.output_times - 1e-12 * max(1.0, nodes[-1]))
+        if output_times is not None:
+            at = np.searchsorted(nodes, output_times - 1e-12 * max(1.0, nodes[-1]))
             Zo, Po = traj.rows(at)
             out['u'][idx], out['v'][idx] = Zo.real.T, Zo.imag.T
             out['du'][idx], out['dv'][idx] = Po.real.T, Po.imag.T

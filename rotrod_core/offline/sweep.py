@@ -27,6 +27,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -39,6 +40,9 @@ from rotrod_core.offline.batch import (
     flat_coefficients,
     velocity_chunk,
 )
+
+if TYPE_CHECKING:
+    from distributed import Client, LocalCluster
 
 MAX_RUNS = 10_000_000
 """Largest number of parameter sets a sweep accepts."""
@@ -83,7 +87,7 @@ def _number(text: str, where: str) -> float:
     return x
 
 
-def parse_axis(spec: str) -> tuple:
+def parse_axis(spec: str) -> tuple[str, np.ndarray]:
     """One grid axis ``NAME=START:STOP:COUNT`` or ``NAME=V1,V2,...`` -> (field, values).
 
     START:STOP:COUNT is COUNT evenly spaced values from START to STOP, both included
@@ -109,7 +113,7 @@ def parse_axis(spec: str) -> tuple:
     return field_name, np.array([_number(v, where) for v in values.split(',')])
 
 
-def grid_table(specs) -> dict:
+def grid_table(specs) -> dict[str, np.ndarray]:
     """The Cartesian product of grid axes: {field: values of every run}, first axis slowest."""
     axes = [parse_axis(s) for s in specs]
     if not axes:
@@ -124,7 +128,7 @@ def grid_table(specs) -> dict:
     return {name: m.ravel() for name, m in zip(names, mesh)}
 
 
-def read_table(path) -> dict:
+def read_table(path) -> dict[str, np.ndarray]:
     """Parameter sets from a CSV file: a header of parameter names, one row per run."""
     path = Path(path)
     with path.open(newline='') as f:
@@ -167,13 +171,13 @@ class ChunkResult:
     """
 
     index: np.ndarray
-    parameters: dict
-    results: dict
-    status: list
+    parameters: dict[str, np.ndarray]
+    results: dict[str, np.ndarray]
+    status: list[str]
 
-    def columns(self) -> dict:
+    def columns(self) -> dict[str, np.ndarray | list[str]]:
         """The rows as columns named with their units (run_index first, status last)."""
-        out = {'run_index': self.index}
+        out: dict[str, np.ndarray | list[str]] = {'run_index': self.index}
         out.update({PARAMETER_COLUMNS[k]: v for k, v in self.parameters.items()})
         out.update({RESULT_COLUMNS[k]: v for k, v in self.results.items()})
         out['status'] = self.status
@@ -204,14 +208,14 @@ def _validate(base: RodParams, table: dict, rows: np.ndarray):
         return base.replace(**changes), np.arange(len(rows)), {}
     except ValueError:
         pass
-    reasons, good = {}, []
+    reasons, valid = {}, []
     for pos, row in enumerate(rows):
         try:
             base.replace(**{k: float(v[pos]) for k, v in changes.items()})
-            good.append(pos)
+            valid.append(pos)
         except ValueError as exc:
             reasons[int(row)] = str(exc)
-    good = np.array(good, dtype=int)
+    good = np.array(valid, dtype=int)
     if good.size == 0:
         return None, good, reasons
     return base.replace(**{k: v[good] for k, v in changes.items()}), good, reasons
@@ -371,7 +375,8 @@ class SweepClient:
         if isinstance(self.workers, bool) or int(self.workers) != self.workers \
                 or self.workers < 1:
             raise ValueError(f'workers must be a positive integer, got {workers!r}')
-        self.cluster = self.client = None
+        self.cluster: LocalCluster | None = None
+        self.client: Client | None = None
 
     def __enter__(self):
         try:
@@ -383,7 +388,7 @@ class SweepClient:
             self.client = Client(self.scheduler, timeout='20s')
             return self.client
         import dask
-        options = {'n_workers': int(self.workers), 'threads_per_worker': 1,
+        options: dict[str, Any] = {'n_workers': int(self.workers), 'threads_per_worker': 1,
                    'processes': self.processes, 'dashboard_address': None}
         if self.processes:
             options['host'] = '127.0.0.1'

@@ -31,6 +31,7 @@ import shutil
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Final
 
 import numpy as np
 
@@ -43,7 +44,7 @@ from rotrod_core.model.params import DEFAULT_HUB_RADIUS
 from rotrod_core.model.scene import scene
 
 STORAGE = 'mcap'
-VERSION = 9
+VERSION: Final = 9
 """rosbag2 metadata version written by Jazzy's ``ros2 bag record``."""
 QOS_DEPTH = 10
 """History depth of the node's publishers (reliable, volatile: rclpy's default)."""
@@ -202,7 +203,10 @@ class _Messages:
             out.append(self.make(
                 'visualization_msgs/msg/Marker', header=self.header(stamp, frame_id),
                 ns=interface.MARKER_NAMESPACE, id=shape.id,
-                type=getattr(cls, shape.kind.upper()), action=cls.ADD, pose=pose,
+                type=getattr(cls, shape.kind.upper()),
+                # the typestore's message classes carry their constants; its types do not
+                action=cls.ADD,  # type: ignore[attr-defined]
+                pose=pose,
                 scale=scale, color=self.make('std_msgs/msg/ColorRGBA', r=r, g=g, b=b, a=a),
                 points=[self.point(p) for p in shape.points]))
         return self.make('visualization_msgs/msg/MarkerArray', markers=out)
@@ -274,25 +278,26 @@ def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dic
             t = float(run.t[i])
             ns = interface.stamp_nanoseconds(t)
             stamp = msgs.time(t)
-            state = State(*(float(x[i]) for x in (run.u, run.v, run.du, run.dv, run.theta,
-                                                  run.omega)))
+            u, v, du, dv, theta, omega = (float(x[i]) for x in (run.u, run.v, run.du, run.dv,
+                                                                run.theta, run.omega))
+            state = State(u, v, du, dv, theta, omega)
             write('joint_states', ns, msgs.joint_state(stamp, state, float(run.torque[i])))
-            write('tip/deflection', ns, msgs.deflection(stamp, state.u, state.v, rotor))
+            write('tip/deflection', ns, msgs.deflection(stamp, u, v, rotor))
             write('tip/position', ns, msgs.position(stamp, (run.x[i], run.y[i], height),
                                                     world))
             write('frequencies', ns, msgs.frequencies(f1[j], f2[j]))
             write('/clock', ns, msgs.clock(stamp))
             if estimator is not None:
-                estimate = estimator.push(t, state.u, state.v)
+                estimate = estimator.push(t, u, v)
                 if estimate is not None:
                     write('frequencies/estimate', ns,
                           msgs.frequencies(estimate.f1, estimate.f2))
             if settings.markers and (j + 1) % marker_every == 0:
-                rod = rod_centerline(run.params, state.u, state.v, state.theta,
+                rod = rod_centerline(run.params, u, v, theta,
                                      scale=settings.marker_deflection_scale)
                 trail.append(tuple(rod[-1]))
                 write('markers', ns, msgs.markers(stamp, world, scene(
-                    disk_radius=settings.disk_radius, theta=state.theta, rod=rod,
+                    disk_radius=settings.disk_radius, theta=theta, rod=rod,
                     rod_diameter=rod_diameter, mass_radius=mass_radius, trail=list(trail))))
     except BaseException:
         writer.abort()
