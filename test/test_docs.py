@@ -46,3 +46,30 @@ def test_the_readme_commands_are_real_subcommands():
     commands = set(re.findall(r'^rotrod ([a-z-]+)', readme, re.M))
     choices = next(a for a in build_parser()._actions if a.dest == 'command').choices
     assert commands and commands <= set(choices), commands - set(choices)
+
+
+def model_anchors() -> set:
+    return set(re.findall(r'<a id="([^"]+)"></a>', (ROOT / 'docs' / 'model.md').read_text()))
+
+
+def cited_anchors() -> dict:
+    """docs/model.md#anchor citations in the package's code, anchor -> files."""
+    cited: dict = {}
+    for path in [*ROOT.joinpath('rotrod_core').rglob('*.py'),
+                 *ROOT.joinpath('rotrod_ros').rglob('*.py')]:
+        for anchor in re.findall(r'docs/model\.md#([A-Za-z0-9_-]+)', path.read_text()):
+            cited.setdefault(anchor, set()).add(str(path.relative_to(ROOT)))
+    return cited
+
+
+def test_every_equation_of_the_model_page_is_cited_by_the_code_that_computes_it():
+    anchors, cited = model_anchors(), cited_anchors()
+    assert len(anchors) >= 15
+    assert sorted(anchors - set(cited)) == []                    # each anchor has its code
+    assert {a: f for a, f in cited.items() if a not in anchors} == {}   # no dead citation
+
+
+def test_the_code_cites_the_repository_s_model_page_not_the_shared_one():
+    for path in [*ROOT.joinpath('rotrod_core').rglob('*.py'),
+                 *ROOT.joinpath('rotrod_ros').rglob('*.py')]:
+        assert 'MODEL.md' not in path.read_text(), path

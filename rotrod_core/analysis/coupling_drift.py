@@ -75,5 +75,8 @@ def invariant_drift(params: RodParams = DEFAULT_PARAMS, coupling: str = 'exact',
 
 def compare_couplings(params: RodParams = DEFAULT_PARAMS, t_end: float = 40.0,
                       dt: float = 1e-3, initial: dict | None = None) -> dict[str, InvariantDrift]:
-    """:func:`invariant_drift` for every coupling, keyed by its name."""
+    """:func:`invariant_drift` for every coupling, keyed by its name.
+
+    Model: docs/model.md#eq-torque-paper, docs/model.md#invariants.
+    """
     return {c: invariant_drift(params, c, t_end, dt, initial) for c in COUPLINGS}

@@ -43,6 +43,8 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
     ``start`` is 'quasi_static', 'step' or 'impulsive' (module docstring). Vectorized:
     ``params.eccentricity`` and ``deflection_limit`` may be arrays (Fig. 10). The
     quasi-static form uses the radial stiffness k1; the others need an isotropic rod.
+
+    Model: docs/model.md#eq-critical.
     """
     _limit(deflection_limit)
     if start not in STARTS:
@@ -88,6 +90,8 @@ def step_response(params: RodParams, omega: float, t):
     w1 = w0 - w, w2 = w0 + w, for an isotropic undamped rod and 0 < w < w0 (rad/s);
     t in s (array); re = (Me / M) r0 (r0 for a massless rod). Its peak magnitude
     approaches 2 u_s.
+
+    Model: docs/model.md#eq-29.
     """
     if not params.is_isotropic or np.any(np.asarray(params.damping_ratio) > 0):
         raise ValueError('step_response (Eq. 29) needs an isotropic rod without damping')

@@ -38,6 +38,8 @@ def eq28(w0, omega) -> tuple:
 
     For floats (a live engine, per sample, with w0 cached) or arrays; see
     :func:`dynamic_frequencies` for when it applies.
+
+    Model: docs/model.md#eq-28.
     """
     a = abs(omega)
     return abs(w0 - a) / TWO_PI, (w0 + a) / TWO_PI
@@ -51,6 +53,8 @@ def dynamic_frequencies(params: RodParams, omega):
     with the axial load of gravity and the rod's modal mass). For k1 != k2 or with
     damping, the two damped frequencies of :func:`modal_analysis`, lower first.
     Vectorized over ``omega``.
+
+    Model: docs/model.md#eq-28.
     """
     w = _omega_array(omega)
     if has_eq28(params):
@@ -118,6 +122,8 @@ def modal_analysis(params: RodParams, omega: float) -> ModalAnalysis:
     """Eigen analysis of the free vibration at constant ``omega`` (rad/s).
 
     Valid for any k1, k2 and damping. Modes are ordered by frequency.
+
+    Model: docs/model.md#stability.
     """
     if params.is_batch:
         raise ValueError('modal_analysis takes one system, not a batch')
@@ -241,6 +247,8 @@ def static_deflection(params: RodParams, omega):
     m w^2 r0 / (k1 - m w^2)) and k1 including the axial load of gravity. Infinite at
     w^2 = k1/M; negative above it (an equilibrium that is not reached from rest).
     Vectorized over ``omega`` and batch parameters.
+
+    Model: docs/model.md#eq-static.
     """
     w = _omega_array(omega)
     k1, m = params.stiffness_radial, params.modal_mass

@@ -122,6 +122,8 @@ class Eq26Profile(Profile):
     Attributes:
         period: T, s (paper: 15 s).
         omega_target: W, rad/s (paper: 2 rad/s).
+
+    Model: docs/model.md#eq-26.
     """
 
     period: float = 15.0

@@ -1,7 +1,7 @@
 """Identify the rig from its motion: natural frequency, eccentricity and damping.
 
-For an isotropic rod with rotating damping (MODEL.md), z = u + i v (m, rotating frame)
-obeys, given the hub's angular velocity w(t) (rad/s) and acceleration w'(t),
+For an isotropic rod with rotating damping (docs/model.md#eq-damping), z = u + i v (m,
+rotating frame) obeys, given the hub's angular velocity w(t) (rad/s) and acceleration w'(t),
 
     z'' + (g + 2 i w) z' + (a - w^2 + i w') z = r0 (w^2 - i w'),
     a = w0^2,  g = 2 zeta w0,

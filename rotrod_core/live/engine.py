@@ -73,6 +73,8 @@ def foreshortening(deflection_ratio):
     """Relative drop of the tip's height, dz / l, at a tip deflection ``delta / l`` (1).
 
     Second order in the deflection on the static cantilever shape: 0.6 (delta / l)^2.
+
+    Model: docs/model.md#validity.
     """
     return FORESHORTENING_FACTOR * np.square(deflection_ratio)
 

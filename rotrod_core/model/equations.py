@@ -47,7 +47,10 @@ Real: TypeAlias = float | np.ndarray
 
 
 class State(NamedTuple):
-    """Full state of the system (SI units; arrays allowed for batches)."""
+    """Full state of the system (SI units; arrays allowed for batches).
+
+    Model: docs/model.md#frames.
+    """
 
     u: Real
     """Radial deflection of the mass, m (rotating frame, e1)."""
@@ -171,6 +174,8 @@ def deflection_accelerations(co: Coefficients, u, v, du, dv, omega, omega_dot):
     derived in docs/model.md), with radial/tangential stiffness k1, k2, rotating damping
     and the rod's mass (modal mass M, load radius re; module docstring).
     ``omega`` and ``omega_dot`` (rad/s, rad/s^2) are the hub's at this instant.
+
+    Model: docs/model.md#eq-deflection, docs/model.md#eq-complex, docs/model.md#eq-damping.
     """
     w2 = omega * omega
     re = co.load_radius
@@ -186,6 +191,8 @@ def rod_torque_on_hub(co: Coefficients, u, v, du, dv):
     acts on the rod at the mass, at (r0 + u, v) from the axis, and reaches the hub
     through the rod. With the rod's mass the same form holds at the load radius re
     (what remains of the rod's inertia is in the effective hub inertia Je).
+
+    Model: docs/model.md#eq-torque.
     """
     x = co.load_radius + u
     return v * (co.k2 * x - co.k1 * u) + co.c2 * x * dv - co.c1 * v * du
@@ -199,6 +206,8 @@ def hub_angular_acceleration(co: Coefficients, state, torque, coupling: str = 'e
     printed plus the hub's J w', (Je + M rho^2) w' = Q - 2 M w ((re + u) u' + v v'),
     rho^2 = (re + u)^2 + v^2 (Je + M rho^2 is the rigid moment of inertia of hub, rod
     and mass in the deflected shape).
+
+    Model: docs/model.md#eq-torque, docs/model.md#eq-torque-paper.
     """
     u, v, du, dv, _, omega = state
     if coupling == 'exact':
@@ -248,6 +257,8 @@ def energy(co: Coefficients, state):
     V = (k1 u^2 + k2 v^2) / 2: the elastic energy together with the potential of
     gravity in its linearised (geometric-stiffness) form, which k1, k2 include.
     Its rate is dE/dt = Q w - c1 u'^2 - c2 v'^2.
+
+    Model: docs/model.md#invariants.
     """
     u, v, du, dv, _, omega = state
     vx = du - omega * v
@@ -262,6 +273,8 @@ def angular_momentum(co: Coefficients, state):
     L = (Je + M rho^2) w + M ((re + u) v' - v u'), rho^2 = (re + u)^2 + v^2; dL/dt = Q.
     (For a massless rod M = m, re = r0, Je = J. With the rod: Je + M rho^2 =
     J + (m + rho A l) r0^2 + 2 Me r0 u + M (u^2 + v^2) and M (re + u) = Me r0 + M u.)
+
+    Model: docs/model.md#eq-momentum, docs/model.md#invariants.
     """
     u, v, du, dv, _, omega = state
     x = co.load_radius + u
@@ -271,7 +284,10 @@ def angular_momentum(co: Coefficients, state):
 
 
 def inertial_position(co: Coefficients, u, v, theta):
-    """Position (x, y) of the mass in the inertial frame, m (z = rod length)."""
+    """Position (x, y) of the mass in the inertial frame, m (z = rod length).
+
+    Model: docs/model.md#eq-inertial.
+    """
     x = co.eccentricity + u
     c, s = np.cos(theta), np.sin(theta)
     return x * c - v * s, x * s + v * c

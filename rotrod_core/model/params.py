@@ -160,6 +160,8 @@ class RodParams:
             Rayleigh-Ritz model (:attr:`modal_mass`, :attr:`eccentric_mass`), and
             with ``gravity`` its own weight adds the geometric stiffness
             -(3/8) rho A g (a Rayleigh estimate with the unloaded shape).
+
+    Model: docs/model.md#table-1.
     """
 
     mass: Any = _field(0.3, 'kg', 'tip mass m', 0.0, 1e4, sign='positive')
@@ -405,7 +407,10 @@ class RodParams:
 
     @property
     def bending_stiffness_radial(self):
-        """Tip stiffness 3 E I1 / l^3 of the unloaded rod (radial), N/m: the paper's k."""
+        """Tip stiffness 3 E I1 / l^3 of the unloaded rod (radial), N/m: the paper's k.
+
+        Model: docs/model.md#eq-stiffness.
+        """
         return self._bending_stiffness('radial')
 
     @property
@@ -461,7 +466,10 @@ class RodParams:
 
     @property
     def natural_frequency(self):
-        """Circular natural frequency w0 = sqrt(k/M) of an isotropic rod, rad/s."""
+        """Circular natural frequency w0 = sqrt(k/M) of an isotropic rod, rad/s.
+
+        Model: docs/model.md#eq-natural-frequency.
+        """
         self._require_isotropic('natural_frequency')
         return self.natural_frequency_radial
 
@@ -507,7 +515,10 @@ class RodParams:
 
     @property
     def damping_radial(self):
-        """Viscous damping coefficient c1 = 2 zeta sqrt(k1 M) on u', N s/m."""
+        """Viscous damping coefficient c1 = 2 zeta sqrt(k1 M) on u', N s/m.
+
+        Model: docs/model.md#eq-damping.
+        """
         # sqrt(k1) sqrt(M): k1 M may overflow where c1 does not (0 x inf: NaN)
         return (2.0 * self.damping_ratio * np.sqrt(self.stiffness_radial)
                 * np.sqrt(self.modal_mass))
