@@ -6,8 +6,8 @@
     .venv/bin/python bench/run_all.py --quick --write # ... and written anyway
     .venv/bin/python bench/run_all.py --no-write      # full run, docs/performance.md untouched
 
-Runs bench_core.py, bench_sweep.py, bench_estimator.py, bench_realtime.py and
-bench_fleet.py one after the other, each as its own process writing its rows as JSON
+Runs bench_core.py, bench_sweep.py, bench_estimator.py, bench_planner.py,
+bench_identify.py, bench_realtime.py and bench_fleet.py one after the other, each as its own process writing its rows as JSON
 (bench/results.py); their own tables go to stderr. The combined table, stamped with the
 date, the machine, the load average at start, the code measured and this command, goes
 to stdout and replaces what lies between ``<!-- bench:begin -->`` and ``<!-- bench:end
@@ -278,6 +278,9 @@ def main(argv: list | None = None) -> int:
     benches = [('bench_core.py', ['--quick'] if args.quick else [], 900),
                ('bench_sweep.py', ['--quick'] if args.quick else [], 900),
                ('bench_estimator.py', [], 900),
+               ('bench_planner.py', [], 900),
+               ('bench_identify.py', ['--seeds', '10', '--eq26-seeds', '3']
+                if args.quick else [], 1800),
                ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600),
                ('bench_fleet.py', ['--duration', f'{duration:g}',
                                    *(['--rods', '3'] if args.quick else [])],

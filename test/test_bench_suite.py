@@ -163,6 +163,7 @@ def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys)
     assert run_all.main(['--quick', '--page', str(readme)]) == 1   # a target not met
     assert readme.read_text() == original                            # --quick: not written
     assert [c[0] for c in calls] == ['bench_core.py', 'bench_sweep.py', 'bench_estimator.py',
+                                     'bench_planner.py', 'bench_identify.py',
                                      'bench_realtime.py', 'bench_fleet.py']
     assert calls[0][1] == ['--quick'] and calls[1][1] == ['--quick']
     assert calls[3][1] == ['--duration', '5']
