@@ -13,7 +13,7 @@ import setup_py
 
 from rotrod_ros import demo
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 LAUNCH = ROOT / 'launch' / 'demo.launch.py'
 
 

@@ -20,7 +20,7 @@ from sensor_msgs.msg import JointState
 
 from rotrod_ros import fleet
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 RODS = 3
 
 

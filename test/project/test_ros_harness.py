@@ -26,7 +26,7 @@ from ros_harness import (
     ros_arguments,
 )
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]     # test/: the harness and nodes/
 TALKER = HERE / 'nodes' / 'talker.py'
 LISTENER = HERE / 'nodes' / 'listener.py'
 

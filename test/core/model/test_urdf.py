@@ -32,7 +32,7 @@ from rotrod_core.model.urdf import (
 )
 from rotrod_ros.demo import PARAM_FILES
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 SHIPPED = ROOT / SHIPPED_FILE
 FK_TOLERANCE = 1e-9
 """m: the issue's bound between the URDF's tip and tip/position."""

@@ -26,7 +26,7 @@ from rotrod_core.command.registry import (
 )
 from rotrod_core.live.engine import EngineConfig
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope='module')

@@ -19,7 +19,7 @@ from rotrod_ros.rerun_logger import RerunLogger
 from rotrod_ros.rig_monitor import RigMonitorNode
 from rotrod_ros.simulator import SimulatorNode
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 NODE_CLASSES = {'simulator': SimulatorNode, 'profile_publisher': ProfilePublisher,
                 'rerun_logger': RerunLogger, 'rig_monitor': RigMonitorNode}
 

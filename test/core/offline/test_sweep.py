@@ -19,7 +19,7 @@ from rotrod_core import Eq26Profile, NonFiniteStateError, RodParams, simulate_ba
 from rotrod_core.offline import sweep
 from rotrod_core.offline.batch import BLOCK
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 pq = pytest.importorskip('pyarrow.parquet')
 pytest.importorskip('distributed')
 

@@ -32,7 +32,7 @@ from rotrod_ros.install import executable
 # rerun warns on every read of a file without footer, which a killed one is by design
 pytestmark = pytest.mark.filterwarnings('ignore:RRD file has no footer')
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STEP = 0.01
 """The simulator's publish period at its default 100 Hz, s."""
 MARGIN = 0.25

@@ -24,7 +24,7 @@ from rotrod_ros.parameters import (
     defaults,
 )
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_parameter_defaults_are_the_core_defaults_and_in_range():

@@ -28,7 +28,7 @@ from rotrod_core.model import interface
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.reporting.bag import BAG_TOPICS, BagSettings, write_bag
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 T_END = 20.0
 RATE = 100.0
 TYPES = {

@@ -250,7 +250,7 @@ def test_two_namespaced_simulators_do_not_cross_talk(ros_processes, ros_node, re
 
 
 def test_table1_params_file_loads_and_bad_files_are_refused(ros_processes, tmp_path, request):
-    table1 = Path(__file__).resolve().parent.parent / 'config' / 'table1.yaml'
+    table1 = Path(__file__).resolve().parents[2] / 'config' / 'table1.yaml'
     ns = namespace(request)
     proc = ros_processes.start_console_script(
         'simulator', '--ros-args', '-r', f'__ns:={ns}', '--params-file', str(table1))

@@ -34,7 +34,7 @@ import setup_py
 
 pytestmark = pytest.mark.slow
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = 'rotrod'
 EXCLUDED_DIRS = {'.git', '.venv', 'build', 'install', 'log', '__pycache__', '.pytest_cache',
                  '.ruff_cache', '.hypothesis'}

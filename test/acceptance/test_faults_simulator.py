@@ -35,7 +35,7 @@ from std_msgs.msg import Float64
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]        # each takes 12-20 s
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 PERIOD = 0.01                   # publish_rate 100 Hz
 A_MAX = 0.5                     # max_angular_acceleration default, rad/s^2
 

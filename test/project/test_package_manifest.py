@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from setup_py import setup_kwargs
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CORE = 'rotrod_core'
 
 REQUIRED_EXEC_DEPENDS = {

@@ -12,7 +12,7 @@ Ranks, lowest first; a module may import its own subpackage and lower ranks only
 import ast
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 RANKS = {name: rank for rank, name in enumerate(
     ['numerics', 'model', 'command', 'offline', 'analysis', 'live', 'estimation',
      'reporting', 'cli', '__init__'])}

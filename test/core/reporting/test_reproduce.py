@@ -24,7 +24,7 @@ from rotrod_core.cli import main
 from rotrod_core.reporting import recording
 from rotrod_ros.install import executable
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 DOCS = ROOT / 'docs'
 PAPER_FIGURES = ('fig03_angular_velocity.png', 'fig04_trajectory.png', 'fig05_spin_up.png',
                  'fig06_hold.png', 'fig07_spin_down.png', 'fig08_rest.png',
