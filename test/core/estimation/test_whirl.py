@@ -32,6 +32,7 @@ from rotrod_core import (
     modal_analysis,
     simulate,
 )
+from rotrod_core.estimation.whirl import fit_whirls
 
 P = RodParams()
 DT = 1e-3
@@ -348,3 +349,29 @@ def test_online_estimator_with_dropped_messages():
     assert len(estimates) >= 8
     for est in estimates:
         assert max(relative_errors((est.f1, est.f2), 2.0)) < 1e-9, est.reason
+
+
+def test_fit_recovers_a_centre_and_two_whirls():
+    t = np.arange(0.0, 20.0, 0.01)
+    c, a, b = 1e-3 + 2e-4j, 3e-6 * np.exp(0.3j), 1e-6 * np.exp(-1.1j)
+    wf, wb = 7.3, 11.9
+    z = c + a * np.exp(1j * wf * t) + b * np.exp(-1j * wb * t)
+    fit = fit_whirls(t, z.real, z.imag)
+    assert fit.forward_omega == pytest.approx(wf, rel=1e-10)
+    assert fit.backward_omega == pytest.approx(wb, rel=1e-10)
+    assert abs(fit.centre - c) < 1e-15 and abs(fit.forward - a) < 1e-15
+    assert abs(fit.backward - b) < 1e-15 and fit.relative_residual < 1e-9
+    assert fit.precession_rate == pytest.approx((wf - wb) / 2, rel=1e-9)
+    assert fit.forward_frequency == pytest.approx(wf / (2 * math.pi), rel=1e-10)
+
+
+def test_fit_semi_axes_are_the_ellipse_of_the_samples():
+    t = np.arange(0.0, 10.0, 1e-3)
+    a, b, w = 2e-6 * np.exp(0.4j), 0.5e-6 * np.exp(2.0j), 5.0
+    z = a * np.exp(1j * w * t) + b * np.exp(-1j * w * t)
+    fit = fit_whirls(t, z.real, z.imag)
+    r = np.abs(z - fit.centre)
+    assert fit.semi_major == pytest.approx(r.max(), rel=1e-6)
+    assert fit.semi_minor == pytest.approx(r.min(), rel=1e-6)
+    assert fit.semi_minor == pytest.approx(1.5e-6, rel=1e-9)
+    assert abs(fit.precession_rate) < 1e-9

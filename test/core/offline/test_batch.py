@@ -9,7 +9,12 @@ import math
 
 import numpy as np
 import pytest
-from reference import eq26
+from reference import (
+    W0,
+    eq26,
+    rk4_phase_bound,
+    step_start,
+)
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
@@ -23,7 +28,7 @@ from rotrod_core import (
     simulate,
     simulate_batch,
 )
-from rotrod_core.model.equations import Coefficients, rotating_frame_matrix
+from rotrod_core.model.equations import Coefficients, State, rotating_frame_matrix
 from rotrod_core.offline import batch_velocity
 
 T_END = 40.0
@@ -240,3 +245,55 @@ def test_profiles_with_kinks_step_on_their_breakpoints(profile):
         at = np.searchsorted(one.t, b.t - 1e-9)
         assert np.max(np.abs(b.u[i] - one.u[at])) <= 1e-10
         assert np.max(np.abs(b.v[i] - one.v[at])) <= 1e-10
+
+
+def _closed_form_peak(w, r):
+    """Largest |Eq. 29| over 10 s: a 0.1 ms scan, then a bounded search at its peak."""
+    from scipy.optimize import minimize_scalar
+    t = np.arange(0, 10.0 + 1e-9, 1e-4)
+    k = int(np.argmax(np.abs(step_start(t, w, r0=r))))
+    best = minimize_scalar(lambda s: -abs(step_start(s, w, r0=r)), method='bounded',
+                           bounds=(t[max(k - 1, 0)], t[min(k + 1, len(t) - 1)]),
+                           options={'xatol': 1e-12})
+    return -best.fun
+
+
+def test_batch_matches_closed_form_over_eccentricity():
+    r0 = np.array([0.0, 0.05, 0.1, 0.2])
+    w, t_end = 2.0, 10.0
+    b = simulate_batch(RodParams(eccentricity=r0), ConstantProfile(w), t_end,
+                       output_interval=0.01)
+    assert b.method == 'exponential'
+    for i, r in enumerate(r0):
+        z = step_start(b.t, w, r0=r)
+        assert np.max(np.abs(b.u[i] + 1j * b.v[i] - z)) <= 1e-12
+        # the peak between samples, not only the largest sample
+        assert b.peak_deflection[i] == pytest.approx(_closed_form_peak(w, r), abs=1e-12)
+    # the previous fixed-step RK4, kept as method='rk4': within its phase-error bound
+    old = simulate_batch(RodParams(eccentricity=r0), ConstantProfile(w), t_end, dt=1e-3,
+                         record_every=10, method='rk4')
+    for i, r in enumerate(r0):
+        z = step_start(old.t, w, r0=r)
+        bound = rk4_phase_bound(1e-3, W0 + w, t_end, np.max(np.abs(z)))
+        assert np.max(np.abs(old.u[i] + 1j * old.v[i] - z)) <= bound
+        assert old.peak_deflection[i] <= _closed_form_peak(w, r) + 1e-15 + bound
+
+
+def test_batch_torque_drive_conserves_invariants():
+    J = np.array([0.01, 0.05, 0.2])
+    b = simulate_batch(RodParams(hub_inertia=J), torque=0.0, t_end=10.0,
+                       initial={'omega': 2.0, 'u': 1e-3})
+    from rotrod_core.model.equations import angular_momentum
+    co = Coefficients.from_params(RodParams(hub_inertia=J))
+    s0 = State(1e-3, 0.0, 0.0, 0.0, 0.0, 2.0)
+    assert np.allclose(angular_momentum(co, b.final), angular_momentum(co, s0), rtol=1e-10)
+
+
+def test_batch_in_worker_processes_matches_single_process():
+    r0 = np.linspace(0.05, 0.15, 4000)
+    p = RodParams(eccentricity=r0)
+    for method in ('rk4', 'exponential'):
+        one = simulate_batch(p, Eq26Profile(), 2.0, workers=1, method=method)
+        two = simulate_batch(p, Eq26Profile(), 2.0, workers=2, method=method)
+        assert np.array_equal(one.peak_deflection, two.peak_deflection)
+        assert np.array_equal(one.final.u, two.final.u)
