@@ -4,6 +4,16 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    EXTREME_FLOATS,
+    HUGE,
+    WRONG_TYPES,
+    finite,
+    props,
+    rod_fields,
+)
 from reference import R0, W0, impulsive_start, step_start
 
 from rotrod_core import (
@@ -67,3 +77,32 @@ def test_critical_speed_rejects_bad_input():
         critical_speed(RodParams(), 3e-3, 'gradual')
     with pytest.raises(ValueError, match='k1 != k2'):
         critical_speed(RECT, 3e-3, 'step')
+
+
+@props(250)
+@given(rod_fields(sane_only=True),
+       st.one_of(st.floats(1e-6, 1.0), EXTREME_FLOATS, WRONG_TYPES),
+       st.sampled_from(['quasi_static', 'step', 'impulsive']),
+       st.sampled_from([0.0, 1e-3, 0.1, 1e300, HUGE]))
+def test_critical_speed_is_below_w0_and_grows_with_the_limit(fields, limit, start, r0):
+    params = RodParams(**{**fields, 'section': 'circular', 'section_width': None,
+                          'section_thickness': None, 'eccentricity': r0})
+    try:
+        w = critical_speed(params, limit, start)
+    except ValueError as exc:
+        assert 'deflection_limit' in str(exc), str(exc)
+        return
+    w0 = params.natural_frequency
+    assert finite(w) and 0 <= w <= w0 * (1 + 1e-12)
+    if float(limit) < HUGE / 2:
+        assert critical_speed(params, 2 * float(limit), start) >= w * (1 - 1e-12)
+    if r0 == 0:
+        assert w == pytest.approx(w0)
+
+
+def test_regression_critical_speed_when_limit_plus_eccentricity_overflows():
+    p = RodParams(eccentricity=HUGE)
+    w0 = p.natural_frequency
+    assert critical_speed(p, HUGE, 'quasi_static') == pytest.approx(w0 * math.sqrt(0.5))
+    assert critical_speed(p, HUGE, 'step') == pytest.approx(w0 * math.sqrt(1 / 3))
+    assert critical_speed(p, HUGE, 'impulsive') == pytest.approx(w0 / 2)

@@ -4,6 +4,15 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    EXTREME_FLOATS,
+    WRONG_TYPES,
+    finite,
+    props,
+    rod_fields,
+)
 from reference import R0, W0
 
 from rotrod_core import (
@@ -107,3 +116,49 @@ def test_damped_free_vibration_decays_below_w0():
     assert slowest < 0
     run = simulate(p, ConstantProfile(5.0), 10.0, initial={'u': 1e-3})
     assert np.max(run.deflection[run.t > 9]) < 1.05e-3 * math.exp(slowest * 9)
+
+
+OMEGAS = st.one_of(st.floats(-100.0, 100.0), EXTREME_FLOATS, WRONG_TYPES,
+                   st.floats(allow_nan=False))
+
+
+@props(250)
+@given(rod_fields(sane_only=True), OMEGAS)
+def test_dynamic_frequencies_and_modes_are_finite_or_a_clear_error(fields, omega):
+    """Eq. 28 / the eigen analysis: finite, 0 <= f1 <= f2, or a ValueError naming omega
+    (not a finite number, or |w| so large that w^2 overflows the state matrix)."""
+    params = RodParams(**fields)
+    try:
+        f1, f2 = dynamic_frequencies(params, omega)
+    except ValueError as exc:
+        assert 'omega' in str(exc), str(exc)
+        assert not (isinstance(omega, float) and abs(omega) <= 1e6)
+        return
+    assert finite([f1, f2]) and 0 <= f1 <= f2
+    try:
+        modes = modal_analysis(params, omega)
+    except ValueError as exc:   # w^2 overflows (before: numpy's LinAlgError)
+        assert 'omega' in str(exc) and abs(omega) > 1e150, str(exc)
+        return
+    assert finite(modes.frequencies) and finite(modes.max_growth_rate)
+
+
+@props(250)
+@given(rod_fields(sane_only=True), OMEGAS)
+def test_static_deflection_is_finite_except_at_resonance(fields, omega):
+    """u_s = m w^2 r0 / (k1 - m w^2): finite for every finite w except exactly at
+    w^2 = k1/m (documented: +inf there); -> -r0 as |w| -> inf (before: NaN for
+    |w| > 1e154, where w^2 overflowed)."""
+    params = RodParams(**fields)
+    try:
+        u, v = static_deflection(params, omega)
+    except ValueError as exc:
+        assert 'omega' in str(exc), str(exc)
+        return
+    assert v == 0.0
+    if params.mass * omega * omega == params.stiffness_radial:
+        assert u == math.inf or params.eccentricity == 0
+    else:
+        assert finite(u), (omega, u)
+        r0 = params.eccentricity
+        assert u >= 0 if omega * omega * params.mass < params.stiffness_radial else u <= -r0

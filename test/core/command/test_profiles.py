@@ -2,6 +2,19 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import event, given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    BAD_TIMES,
+    EXTREME_FLOATS,
+    HUGE,
+    TINY,
+    WRONG_TYPES,
+    anything,
+    finite,
+    profiles,
+    props,
+)
 from reference import eq26
 from scipy.integrate import quad
 
@@ -132,3 +145,152 @@ def test_eq26_peak_angular_acceleration_is_2w_over_t():
     peak = np.max(np.abs(Eq26Profile().omega_dot(t)))
     assert peak == pytest.approx(2 * 2.0 / 15.0, rel=1e-9)
     assert round(peak, 2) == 0.27
+
+
+TIMES = st.one_of(st.floats(-10.0, 500.0), st.floats(allow_nan=False, allow_infinity=False),
+                  st.sampled_from([0.0, -0.0, TINY, 1e-300, 1e300, HUGE, -HUGE]))
+
+
+@st.composite
+def tables(draw, sane_only=False):
+    """Keyword arguments of a TableProfile: increasing times, angular velocities."""
+    n = draw(st.integers(2, 8))
+    value = st.floats(-50.0, 50.0) if sane_only else anything(st.floats(-50.0, 50.0))
+    steps = st.floats(1e-3, 10.0) if sane_only else anything(st.floats(1e-3, 10.0))
+    if draw(st.booleans()) or sane_only:
+        raw = draw(st.lists(st.floats(1e-3, 10.0) if sane_only else st.one_of(
+            st.floats(1e-3, 10.0), st.floats(1e-300, 1e300)), min_size=n, max_size=n))
+        times = list(np.cumsum(raw) - raw[0])
+    else:
+        times = draw(st.lists(steps, min_size=n, max_size=n))
+    omegas = draw(st.lists(value, min_size=n, max_size=n))
+    return {'times': times, 'omegas': omegas}
+
+
+def evaluate(profile, t):
+    """omega, omega_dot at t (finite: the contract) and angle (finite or ValueError)."""
+    w, wd = profile.omega(t), profile.omega_dot(t)
+    assert finite(w) and finite(wd), (profile, t, w, wd)
+    if np.ndim(t) == 0:
+        assert type(w) is float and type(wd) is float
+    else:
+        assert np.shape(w) == np.shape(t) == np.shape(wd)
+    try:
+        theta = profile.angle(t)
+    except ValueError as exc:
+        assert 'overflow' in str(exc), str(exc)
+    else:
+        assert finite(theta), (profile, t, theta)
+    return w, wd
+
+
+@props(500)
+@given(profiles(), st.lists(TIMES, min_size=1, max_size=6))
+def test_profiles_are_refused_clearly_or_finite_at_every_finite_time(spec, times):
+    """Construction: a ValueError naming the class and field, or a profile whose w and
+    w' are finite at every finite time (scalar or array: huge, negative, subnormal).
+    The angle grows without bound (W t): finite, or a ValueError saying it overflows."""
+    cls, kwargs = spec
+    try:
+        profile = cls(**kwargs)
+    except ValueError as exc:
+        event('refused')
+        assert str(exc).startswith(cls.__name__ + '.'), str(exc)
+        return
+    w, wd = evaluate(profile, np.array(times))
+    for i, t in enumerate(times):           # a scalar time and an array agree
+        assert evaluate(profile, t) == (w[i], wd[i])
+    assert finite(profile.peak) and profile.peak >= 0
+    assert profile.end_time is None or finite(profile.end_time)
+
+
+@props(200)
+@given(tables(), st.lists(TIMES, min_size=1, max_size=6))
+def test_tables_are_refused_clearly_or_finite_without_overshoot(kwargs, times):
+    """A table: ValueError, or w, w' finite and w within the tabulated values (PCHIP
+    does not overshoot; up to rounding of the largest |w|)."""
+    try:
+        profile = TableProfile(**kwargs)
+    except ValueError as exc:
+        assert str(exc).startswith('TableProfile'), str(exc)
+        return
+    tol = 1e-12 * np.max(np.abs(profile.omegas))    # PCHIP's rounding, of the largest |w|
+    lo, hi = min(profile.omegas) - tol, max(profile.omegas) + tol
+    for t in [*times, np.array(times)]:
+        w, _ = evaluate(profile, t)
+        assert np.all((lo <= w) & (w <= hi))
+
+
+@props(200)
+@given(st.one_of(profiles(sane_only=True), tables(sane_only=True)),
+       st.one_of(EXTREME_FLOATS, WRONG_TYPES, st.floats(-1e3, 1e3)))
+def test_with_peak_is_refused_clearly_or_a_finite_profile(spec, peak):
+    """with_peak(W): a ValueError, or a profile of the same kind with |peak| = |W|
+    (up to rounding) whose w, w' are finite."""
+    profile = TableProfile(**spec) if isinstance(spec, dict) else spec[0](**spec[1])
+    try:
+        scaled = profile.with_peak(peak)
+    except ValueError as exc:
+        assert 'Profile' in str(exc) or 'peak' in str(exc), str(exc)
+        return
+    assert type(scaled) is type(profile)
+    assert scaled.peak == pytest.approx(abs(float(peak)), rel=1e-9, abs=1e-300)
+    evaluate(scaled, np.linspace(-1.0, 2 * (scaled.end_time or 1.0), 7))
+
+
+@props(150)
+@given(st.one_of(profiles(sane_only=True), tables(sane_only=True)), BAD_TIMES,
+       st.sampled_from(['omega', 'omega_dot', 'angle']), st.booleans())
+def test_a_non_finite_or_non_numeric_time_is_a_clear_error(spec, t, method, as_array):
+    """Contract: t must be a finite number (or an array of them); else ValueError naming t.
+
+    (Before, nan gave 0 from Eq26Profile and NaN from the others, silently.)"""
+    profile = TableProfile(**spec) if isinstance(spec, dict) else spec[0](**spec[1])
+    if as_array and isinstance(t, bool):
+        return      # numpy reads [0.5, True] as [0.5, 1.0]: a bool in a list is a number
+    arg = [0.5, t, 1.0] if as_array else t
+    with pytest.raises(ValueError, match=r'\btime\b|\bt\b'):
+        getattr(profile, method)(arg)
+
+
+@props(300)
+@given(st.floats(1e-3, 1e3), st.floats(-1e3, 1e3), st.floats(-1.0, 3.0), st.floats(-1.0, 3.0))
+def test_eq26_is_continuous_and_its_acceleration_is_bounded_by_2w_over_t(T, W, a, b):
+    """Eq. 26: |w'| <= 2|W|/T everywhere and w is Lipschitz with that constant; w stays
+    between 0 and W."""
+    p = Eq26Profile(period=T, omega_target=W)
+    bound = 2 * abs(W) / T
+    t1, t2 = a * T * 7 / 3, b * T * 7 / 3
+    w1, w2 = p.omega(t1), p.omega(t2)
+    assert abs(p.omega_dot(t1)) <= bound * (1 + 1e-12)
+    assert abs(w2 - w1) <= bound * abs(t2 - t1) * (1 + 1e-9) + 1e-12 * abs(W)
+    assert min(0.0, W) - 1e-12 * abs(W) <= w1 <= max(0.0, W) + 1e-12 * abs(W)
+    for joint in (0.0, T, 4 * T / 3, 7 * T / 3):     # continuous across the joints
+        h = 1e-9 * T
+        assert abs(p.omega(joint + h) - p.omega(joint - h)) <= 2 * bound * h + 1e-12 * abs(W)
+
+
+def test_regression_profiles_whose_slope_or_phase_overflows_are_refused():
+    for make in (lambda: Eq26Profile(period=1e-320), lambda: Eq26Profile(period=TINY,
+                                                                         omega_target=0.0),
+                 lambda: RampProfile(ramp_time=1e-320),
+                 lambda: RampProfile(t_start=HUGE, ramp_time=HUGE),
+                 lambda: SineSweepProfile(f_end=1e300, duration=1e10),
+                 lambda: SineSweepProfile(amplitude=HUGE, offset=HUGE),
+                 lambda: TableProfile([0, 1e-300], [-1e308, 1e308])):
+        with pytest.raises(ValueError, match='Profile'):
+            make()
+    with pytest.raises(ValueError, match='overflow'):
+        ConstantProfile(1e308).angle(10.0)
+
+
+@props(60)
+@given(st.one_of(st.text(max_size=5), st.sampled_from(['eq26', 'ramp', 'table'])),
+       st.dictionaries(st.sampled_from(['period', 'omega_target', 'bogus', 'times']),
+                       anything(st.floats(0.1, 10.0)), max_size=3))
+def test_make_profile_raises_value_error_only(name, kwargs):
+    try:
+        profile = make_profile(name, **kwargs)
+    except ValueError:
+        return
+    evaluate(profile, 1.0)

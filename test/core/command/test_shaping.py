@@ -1,9 +1,20 @@
 """Setpoint shaping: linear interpolation of the stream, delayed, bounded, continuous."""
 
 import math
+import re
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    EXTREME_FLOATS,
+    TINY,
+    WRONG_TYPES,
+    anything,
+    finite,
+    props,
+)
 
 from rotrod_core.command.shaping import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
 
@@ -340,3 +351,92 @@ def test_a_jump_of_the_envelopes_line_reaches_w_only_as_a_slow_drift(monkeypatch
     assert deviation() < 0.01
     monkeypatch.setattr(shaping, 'GRID_TIME_CONSTANT', 1e-300)     # the line, unfiltered
     assert deviation() > 0.05
+
+
+SETPOINTS = st.one_of(st.floats(-100.0, 100.0), st.floats(-100.0, 100.0),
+                      st.floats(-1e6, 1e6), st.sampled_from([0.0, TINY, -TINY]))
+
+
+GAPS = st.one_of(st.sampled_from([0.0, 0.001, 0.01, 0.01, 0.01, 0.02, 0.3, 1.0]),
+                 st.floats(0.0, 0.05), st.floats(0.0, 10.0), st.sampled_from([TINY, 1e-300]))
+
+
+@props(200)
+@given(st.floats(1e-3, 1e3), st.floats(1e-3, 1.0), st.floats(-10.0, 10.0),
+       st.floats(0.0, 1e6), st.lists(st.tuples(SETPOINTS, GAPS), min_size=1, max_size=60))
+def test_the_shaper_gives_a_continuous_w_within_the_acceleration_limit(limit, delay, w0, t0,
+                                                                       stream):
+    """Any stream of finite setpoints at non-decreasing times: w(t) is finite, continuous
+    (Lipschitz with the limit, to rounding of w) and |w'| <= max_angular_acceleration
+    (before: 69.0000001 for 69 rad/s^2 at t = 2.6e5 s)."""
+    shaper = OmegaSetpointShaper(limit, delay=delay, omega=w0, time=t0)
+    t, ramps = t0, []
+    for setpoint, gap in stream:
+        t += gap
+        ramps.append(shaper.command(setpoint, t))
+    knots = sorted({k for r in ramps for k in r.times if math.isfinite(k)})
+    end = max(knots[-1], t) + 1.0
+    grid = np.union1d(np.linspace(t0, end, 2001), [k for k in knots if k <= end])
+    w = np.array([shaper.omega(x) for x in grid])
+    wd = np.array([shaper.omega_dot(x) for x in grid])
+    assert finite(w) and finite(wd)
+    scale = max(1.0, float(np.max(np.abs(w))))
+    assert np.max(np.abs(wd)) <= limit     # exactly: knots are placed after rounding
+    jumps = np.abs(np.diff(w)) - limit * np.diff(grid) * (1 + 1e-9)
+    assert np.max(jumps) <= 1e-9 * scale
+
+
+def test_regression_shaper_extremes():
+    # intervals below the time's rounding: equal due times gave ZeroDivisionError, and
+    # max_stall / interval = 5e299 path knots an unclear numpy 'Maximum allowed size'
+    shaper = OmegaSetpointShaper(1.0, min_interval=1e-300, nominal_interval=1e-300)
+    t = 0.0
+    for k in range(30):
+        shaper.command(1e9 * (k % 2), t)
+        t += 1e-300
+    assert finite([shaper.omega(t + x) for x in (0.0, 0.1, 1.0, 1e3)])
+    # |w| near the float range: w1 - w0 overflowed to inf (then inf x 0 = NaN)
+    with pytest.raises(ValueError, match='setpoint must be within'):
+        shaper.command(1e308, t)
+    with pytest.raises(ValueError, match='max_stall'):
+        OmegaSetpointShaper(1e308, max_stall=10.0)
+    # at t ~ 2.6e5 s the rounding of the ramp's end made |w'| exceed the limit by 4e-9
+    shaper = OmegaSetpointShaper(69.0, delay=1.0, time=262143.0)
+    shaper.command(0.0, 262143.0)
+    ramp = shaper.command(1.0, 262143.0)
+    assert abs(ramp.omega_dot(ramp.start)) <= 69.0
+    with pytest.raises(ValueError, match='time'):
+        shaper.omega(math.nan)
+
+
+@props(150)
+@given(st.lists(st.tuples(anything(st.floats(-10.0, 10.0)),
+                          anything(st.floats(0.0, 10.0))), min_size=1, max_size=12))
+def test_bad_setpoints_and_times_are_a_value_error_that_keeps_the_shaper(commands):
+    """Bad setpoint (not a finite number), bad time (not finite, or before the previous
+    one): ValueError, and the shaped w(t) is unchanged."""
+    shaper = OmegaSetpointShaper(2.0)
+    probe = np.linspace(0.0, 12.0, 49)
+    for setpoint, t in commands:
+        before = [shaper.omega(x) for x in probe]
+        try:
+            shaper.command(setpoint, t)
+        except ValueError as exc:
+            assert re.search(r'setpoint|time', str(exc)), str(exc)
+            assert [shaper.omega(x) for x in probe] == before
+        assert finite([shaper.omega(x) for x in probe])
+
+
+@props(60)
+@given(st.sampled_from(['max_angular_acceleration', 'delay', 'nominal_interval', 'max_stall',
+                        'min_interval', 'max_interval', 'omega', 'time']),
+       st.one_of(EXTREME_FLOATS, WRONG_TYPES))
+def test_the_shaper_configuration_is_validated(name, value):
+    kwargs = {'max_angular_acceleration': 1.0, name: value}
+    try:
+        shaper = OmegaSetpointShaper(**kwargs)
+    except ValueError as exc:
+        assert name in str(exc) or 'interval' in str(exc), str(exc)
+        return
+    shaper.command(1.0, shaper.last_command_time + 1.0)
+    assert finite([shaper.omega(shaper.last_command_time + x) for x in (0.0, 1.0, 1e3)])

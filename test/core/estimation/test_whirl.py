@@ -16,9 +16,22 @@ so std(f_hat) >= sqrt(6 sigma^2 / (A^2 N (N^2 - 1))) / (2 pi dt) Hz. SNR = A^2 /
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
+from hypothesis import event, given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    HUGE,
+    NON_FINITE,
+    TINY,
+    WRONG_TYPES,
+    anything,
+    finite,
+    is_number,
+    props,
+)
 from reference import R0, W0, eq26, step_start
 
 from rotrod_core import (
@@ -375,3 +388,170 @@ def test_fit_semi_axes_are_the_ellipse_of_the_samples():
     assert fit.semi_minor == pytest.approx(r.min(), rel=1e-6)
     assert fit.semi_minor == pytest.approx(1.5e-6, rel=1e-9)
     assert abs(fit.precession_rate) < 1e-9
+
+
+@st.composite
+def whirl_windows(draw, sane=None):
+    """(t, u, v): two whirls plus noise and an offset, at an extreme scale; half of
+    them at a usual sampling (1 kHz, 0.5 to 1 s), the others at extreme sampling."""
+    if sane is None:
+        sane = draw(st.booleans())
+    if sane:
+        n = draw(st.sampled_from([500, 1000]))
+        dt = 1e-3
+        t0 = draw(st.sampled_from([0.0, -5.0, 1.7e9]))
+    else:
+        n = draw(st.sampled_from([0, 1, 2, 5, 40, 300, 1000]))
+        dt = draw(st.sampled_from([1e-3, 1e-4, 0.02, TINY, 1e-310, 1e-300, 1e3, 1e305]))
+        t0 = draw(st.sampled_from([0.0, -5.0, 1.7e9, 1e15, 1e300, -1e300, -1e308, 1e308]))
+    t = t0 + dt * np.arange(n)
+    if draw(st.booleans()):         # dropped samples and jitter
+        rng = np.random.default_rng(draw(st.integers(0, 9)))
+        keep = rng.random(n) > 0.2
+        t = (t + rng.uniform(0, 0.3 * dt, n))[keep]
+    n = len(t)
+    scale = draw(st.sampled_from([1.0, 1e-3, TINY, 1e-300, 1e-150, 1e150, 1e300, HUGE]))
+    f1, f2 = draw(st.floats(0.0, 30.0)), draw(st.floats(0.0, 30.0))
+    offset = draw(st.sampled_from([0.0, 1e-3, 1.0]))
+    noise = draw(st.sampled_from([0.0, 1e-6, 1e-4, 10.0]))
+    tau = t - (t[0] if n else 0.0)
+    rng = np.random.default_rng(draw(st.integers(0, 9)))
+    with np.errstate(all='ignore'):     # phases of windows at 1e300 s; u beyond the range
+        z = (offset + 1e-3 * np.exp(2j * np.pi * f1 * tau)
+             + 2e-3 * np.exp(-2j * np.pi * f2 * tau)
+             + noise * (rng.standard_normal(n) + 1j * rng.standard_normal(n)))
+        u, v = scale * z.real, scale * z.imag
+    return t, u, v
+
+
+def check_estimate(est, settings=None):
+    settings = settings or WhirlSettings()
+    for f in (est.f1, est.f2):
+        assert not math.isinf(f)
+        assert math.isnan(f) or 0 <= f <= settings.max_frequency
+    if math.isnan(est.f1) or math.isnan(est.f2):
+        assert est.reason, est
+
+
+# windows of ~1e307 s overflow inside the fit: the estimate is then NaN with a reason
+@pytest.mark.filterwarnings('ignore:overflow encountered in matmul:RuntimeWarning')
+@pytest.mark.filterwarnings('ignore:invalid value encountered in matmul:RuntimeWarning')
+@props(120)
+@given(whirl_windows())
+def test_the_whirl_estimate_is_in_band_or_nan_with_a_reason(window):
+    """Finite input: (f1, f2) finite in [0, max_frequency] or NaN with a reason, never
+    +-inf, and no error but ValueError (non-finite values, times not increasing)."""
+    t, u, v = window
+    try:
+        est = estimate_whirl(t, u, v)
+    except ValueError as exc:
+        event('ValueError')
+        assert re.search(r'finite|increase', str(exc)), str(exc)
+        return
+    event('no estimate' if math.isnan(est.f1) and math.isnan(est.f2) else 'estimate')
+    check_estimate(est)
+    for x in (est.forward.amplitude, est.noise_rms, est.offset.real):
+        assert not math.isinf(x)
+
+
+@props(80)
+@given(whirl_windows(sane=True), st.sampled_from([2.0**-1070, 2.0**-500, 0.5, 2.0**500,
+                                                  2.0**1000]))
+def test_the_whirl_estimate_does_not_depend_on_the_unit(window, factor):
+    """u, v scaled by a power of two (exact): the same frequencies, bit for bit, and
+    amplitudes scaled by it (before: NaN below ~1e-150 m, overflow above ~1e150 m)."""
+    t, u, v = window
+    try:
+        ref = estimate_whirl(t, u, v)
+    except ValueError:      # the window's values overflowed (scale 1.8e308)
+        return
+    with np.errstate(over='ignore'):
+        su, sv = u * factor, v * factor
+    if not (finite(su) and finite(sv)) or np.max(np.abs(np.concatenate((u, v)))) * factor \
+            < 2.0**-1000:   # beyond the float range, or into subnormals (not exact)
+        return
+    est = estimate_whirl(t, su, sv)
+    event('estimate' if math.isfinite(ref.f1) or math.isfinite(ref.f2) else 'no estimate')
+    assert repr((est.f1, est.f2)) == repr((ref.f1, ref.f2))
+    for a, b in ((est.forward, ref.forward), (est.backward, ref.backward)):
+        assert repr(a.amplitude) == repr(b.amplitude * factor) or (
+            a.amplitude == pytest.approx(b.amplitude * factor, rel=1e-12))
+
+
+def test_regression_whirl_scale_and_sampling_extremes():
+    t = np.arange(1000) * 1e-3
+    for scale in (1e-300, 1.0, 1e300):      # the estimate does not depend on the unit
+        f1, f2 = estimate_whirl_frequencies(t, scale * np.cos(20 * t), scale * np.sin(20 * t))
+        assert f1 == pytest.approx(20 / (2 * np.pi), rel=1e-9) and math.isnan(f2)
+    # subnormal sample interval: the block size overflowed int() (OverflowError)
+    est = estimate_whirl(np.arange(40) * 1e-310, np.ones(40), np.zeros(40))
+    assert math.isnan(est.f1) and 'too short' in est.reason
+
+
+@props(100)
+@given(st.sampled_from(['t', 'u', 'v']), st.one_of(NON_FINITE, WRONG_TYPES),
+       st.sampled_from(['length', 'value', 'order']))
+def test_bad_whirl_input_is_a_value_error(name, bad, kind):
+    t = np.arange(100) * 1e-3
+    arrays = {'t': t, 'u': np.cos(t), 'v': np.sin(t)}
+    if kind == 'length':
+        arrays[name] = arrays[name][:-1]
+    elif kind == 'order':
+        arrays['t'] = t[::-1].copy()
+    else:
+        if isinstance(bad, bool):
+            return      # numpy reads a bool in an array as 0 or 1: a number
+        arrays[name] = arrays[name].astype(object)
+        arrays[name][7] = bad
+    with pytest.raises(ValueError):
+        estimate_whirl_frequencies(arrays['t'], arrays['u'], arrays['v'])
+
+
+@props(100)
+@given(st.lists(st.tuples(anything(st.floats(0.0, 0.01)), anything(st.floats(-1e-3, 1e-3)),
+                          anything(st.floats(-1e-3, 1e-3))), min_size=1, max_size=30))
+def test_whirl_estimator_push_refuses_bad_samples_and_keeps_its_state(samples):
+    """push(t, u, v) with a value that is not a finite number, or a time not after the
+    last: ValueError, and the estimator is as if that sample had never come (a twin fed
+    only the accepted samples gives the same estimates)."""
+    def make():
+        return WhirlEstimator(window=0.05, sample_interval=1e-3, update_interval=0.01,
+                              settings=WhirlSettings(max_frequency=50.0, drift_degree=0))
+    est, twin = make(), make()
+    clock = 0.0
+    for dt, u, v in samples:
+        t = clock + dt if is_number(dt) else dt
+        try:
+            result = est.push(t, u, v)
+        except ValueError as exc:
+            assert re.search(r'\b[tuv]\b|times', str(exc)), str(exc)
+            assert not (is_number(t) and is_number(u) and is_number(v) and t > clock)
+            continue
+        assert repr(result) == repr(twin.push(t, u, v))
+        assert repr(est.estimate) == repr(twin.estimate)
+        clock = t
+        if result is not None:
+            check_estimate(result, est.settings)
+
+
+@props(150)
+@given(st.dictionaries(st.sampled_from(['drift_degree', 'max_frequency', 'min_cycles',
+                                        'detection_db', 'max_relative_std', 'max_decay',
+                                        'max_gap']),
+                       anything(st.floats(0.05, 50.0)), max_size=3),
+       anything(st.floats(0.05, 5.0)), anything(st.floats(1e-4, 0.01)),
+       anything(st.floats(0.0, 0.5)))
+def test_whirl_settings_and_estimator_are_refused_clearly_or_usable(kwargs, window,
+                                                                    sample_interval, update):
+    """A ValueError naming the field (before: OverflowError for max_frequency = 5e-324,
+    numpy's 'Maximum allowed dimension exceeded' for a 1e300 s window, 1.2 GB for a
+    1e4 s one), or an estimator that takes samples."""
+    try:
+        settings = WhirlSettings(**kwargs)
+        est = WhirlEstimator(window, sample_interval, update, settings)
+    except ValueError as exc:
+        assert re.search(r'WhirlSettings\.|WhirlEstimator\.', str(exc)), str(exc)
+        return
+    for k in range(5):
+        result = est.push(k * est.sample_interval, 1e-3, 0.0)
+        assert result is None or not math.isinf(result.f1)

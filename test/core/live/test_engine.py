@@ -1,19 +1,37 @@
 """The live simulation engine against closed forms, invariants and the offline run."""
 
 import math
+import re
 
 import numpy as np
 import pytest
+from hypothesis import event, given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    BAD_TIMES,
+    CONTAINERS,
+    EXTREME_FLOATS,
+    HUGE,
+    LAB,
+    WRONG_TYPES,
+    anything,
+    finite,
+    props,
+    rod_fields,
+)
 from reference import R0, W0, K, M
 
 from rotrod_core import Eq26Profile, RodParams, simulate
 from rotrod_core.live.engine import (
     ERROR,
+    MAX_DEFLECTION_RATIO,
     OK,
+    STEP_RESOLUTION,
     WARN,
     CommandRejected,
     EngineConfig,
     SimulationEngine,
+    fastest_rate,
     foreshortening,
 )
 from rotrod_core.numerics.checks import NonFiniteStateError
@@ -436,3 +454,181 @@ def test_a_10_khz_stream_keeps_few_ramps_in_memory():
         eng.command_omega(0.3 * math.sin(k * 1e-4), at=k * 1e-4)
     # past ramps are dropped every 32 steps; those ahead span the 0.05 s delay
     assert len(eng._shaper._ramps) <= 0.032 * 1e4 + 0.05 * 1e4 + 10
+
+
+@st.composite
+def engine_configs(draw):
+    """Valid-or-not EngineConfig keyword arguments around the defaults."""
+    kwargs = {}
+    options = {
+        'drive': st.sampled_from(['velocity', 'torque', 'velocity', 'position']),
+        'coupling': st.sampled_from(['exact', 'paper']),
+        'physics_rate': anything(st.floats(200.0, 5000.0)),
+        'max_angular_acceleration': anything(st.floats(0.01, 2.0)),
+        'max_omega': anything(st.floats(1.0, 50.0)),
+        'max_torque': anything(st.floats(0.01, 10.0)),
+        'deflection_limit': anything(st.floats(1e-3, 0.1)),
+        'warn_fraction': anything(st.floats(0.1, 1.0)),
+        'critical_margin': anything(st.floats(0.0, 0.5)),
+        'setpoint_delay': anything(st.floats(0.02, 0.5)),
+        'command_timeout': anything(st.floats(0.0, 1.0)),
+    }
+    for name, strategy in options.items():
+        if draw(st.integers(0, 3)) == 0:
+            kwargs[name] = draw(strategy)
+    if draw(st.booleans()):
+        try:
+            kwargs['params'] = RodParams(**draw(rod_fields(sane_only=draw(st.booleans()))))
+        except ValueError:
+            pass
+    if draw(st.integers(0, 3)) == 0:
+        kwargs['initial'] = {draw(st.sampled_from(['u', 'v', 'du', 'omega'])):
+                             draw(anything(st.floats(-1e-3, 1e-3)))}
+    return kwargs
+
+
+@props(300)
+@given(engine_configs())
+def test_engine_configs_are_refused_with_a_reason_or_work(kwargs):
+    try:
+        config = EngineConfig(**kwargs)
+    except ValueError as exc:
+        assert str(exc)
+        return
+    engine = SimulationEngine(config)
+    assert finite(engine.state) and finite(engine.energy()) and finite(engine.frequencies())
+    assert all(finite(v) for v in engine.critical_speeds.values())
+    health = engine.health()
+    if engine.deflection > config.deflection_limit:   # an alarm, not a refusal
+        assert health.level == 2 and 'beyond the critical deflection' in health.message
+    else:
+        assert health.level in (0, 1)
+
+
+def mostly(sane):
+    """Usually a sane value, sometimes anything."""
+    return st.one_of(sane, sane, sane, anything(sane))
+
+
+COMMAND_TIMES = st.one_of(st.none(), st.floats(0.0, 0.3), EXTREME_FLOATS, WRONG_TYPES)
+
+
+COMMAND_VALUES = {
+    'omega': mostly(st.one_of(st.floats(-60.0, 60.0),
+                              st.sampled_from([-50.0, -20.0, 20.0, 50.0]))),
+    'torque': mostly(st.one_of(st.floats(-30.0, 30.0), st.sampled_from([-20.0, -5.0, 5.0,
+                                                                         20.0]))),
+}
+
+
+@st.composite
+def commands(draw):
+    """(kind, value, at): steps to take, resets, and commands for the engine's drive
+    (kind 'command', value {drive: value}) or, sometimes, for the other drive."""
+    kind = draw(st.sampled_from(['advance'] * 3 + ['command'] * 3 + ['omega', 'torque',
+                                                                        'reset']))
+    if kind == 'advance':
+        return kind, draw(st.one_of(st.integers(0, 400), st.sampled_from([300, 400]))), None
+    if kind == 'reset':
+        return kind, None, None
+    at = draw(COMMAND_TIMES) if draw(st.integers(0, 3)) == 0 else None
+    if kind == 'command':
+        return kind, {'velocity': draw(COMMAND_VALUES['omega']),
+                      'torque': draw(COMMAND_VALUES['torque'])}, at
+    return kind, draw(COMMAND_VALUES[kind]), at
+
+
+COMMANDS = st.lists(commands(), min_size=1, max_size=20)
+
+
+@props(150)
+@given(rod_fields(sane_only=True, ranges=LAB), st.sampled_from(['velocity', 'torque']),
+       st.sampled_from(['exact', 'paper']), st.floats(0.05, 50.0), st.floats(2e-4, 0.05),
+       st.floats(1.0, 50.0), COMMANDS, st.sampled_from([0.0, 0.0, 0.1, 0.25]))
+def test_the_engine_state_stays_finite_or_it_halts_with_a_reason(fields, drive, coupling,
+                                                                  accel, limit, max_omega,
+                                                                  commands, timeout):
+    """Any command sequence: accepted, or CommandRejected (counted, nothing changes); the
+    state, energy, momentum, torque and frequencies stay finite; in velocity drive |w'|
+    stays within max_angular_acceleration (command-timeout spin-downs included); a halt
+    has a reason and refuses steps."""
+    params = RodParams(**fields)
+    if coupling == 'exact' and params.hub_inertia == 0:
+        coupling = 'paper'
+    rate = max(1000.0, 2.5 * fastest_rate(params, max_omega) / STEP_RESOLUTION)
+    bound = MAX_DEFLECTION_RATIO * params.rod_length      # the default validity bound
+    with np.errstate(all='ignore'):     # an acceleration bound that the rod can bear
+        accel = min(accel, 0.5 * bound * params.stiffness_tangential / params.mass
+                    / params.eccentricity)
+    try:
+        config = EngineConfig(params=params, drive=drive, coupling=coupling,
+                              physics_rate=rate, max_angular_acceleration=accel,
+                              deflection_limit=limit, max_omega=max_omega, max_torque=20.0,
+                              command_timeout=timeout)
+    except ValueError as exc:       # no rotary inertia for the torque drive
+        assert 'rotary inertia' in str(exc), str(exc)
+        return
+    engine = SimulationEngine(config)
+    for kind, value, at in commands:
+        before, time, rejected = engine.state, engine.time, engine.rejected_commands
+        if kind == 'command':
+            kind, value = {'velocity': 'omega', 'torque': 'torque'}[drive], value[drive]
+        if kind in ('omega', 'torque'):
+            try:
+                getattr(engine, f'command_{kind}')(value, at=at)
+            except CommandRejected as exc:
+                assert str(exc)
+                assert engine.rejected_commands == rejected + 1
+                assert engine.state == before and engine.time == time
+        elif kind == 'advance':
+            done = engine.advance(value)
+            assert 0 <= done <= value
+            assert (done == value) or engine.halted
+            if drive == 'velocity':     # w' of the last step, to rounding of w / dt
+                rounding = 4 * np.spacing(max_omega) / engine.dt
+                assert abs(engine.omega_dot) <= config.max_angular_acceleration + rounding
+        else:
+            engine.reset()
+        assert finite(engine.state), engine.state
+        for x in (engine.energy(), engine.angular_momentum(), engine.torque,
+                  engine.omega_dot, engine.frequencies(), engine.inertial_position()):
+            assert finite(x)
+        health = engine.health()
+        event(f'halted: {engine.halted.split(" ")[0]}' if engine.halted else 'running')
+        if engine.halted:
+            assert health.level == ERROR and health.message == engine.halted
+            assert re.search(r'beyond|non-finite', engine.halted)
+            assert not engine.step()
+
+
+@props(60)
+@given(st.one_of(BAD_TIMES, CONTAINERS, st.floats(), st.integers(-5, 5)))
+def test_engine_clock_arguments_are_validated(value):
+    """advance_to / steps_until take a finite time (before: OverflowError for inf, a
+    bare "cannot convert float NaN to integer" for nan); advance takes a whole number of
+    steps (before: NaN meant zero steps, silently, and '3' a TypeError)."""
+    engine = SimulationEngine()
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    for method in (engine.advance_to, engine.steps_until):
+        if numeric and math.isfinite(value):
+            if value <= 1.0:
+                assert method(value) >= 0
+        else:
+            with pytest.raises(ValueError, match=r'\bt\b'):
+                method(value)
+    if isinstance(value, int) and not isinstance(value, bool):
+        assert engine.advance(value) == max(0, value)
+    else:
+        with pytest.raises(ValueError, match='steps'):
+            engine.advance(value)
+    with pytest.raises(ValueError, match='steps'):
+        engine.steps_until(HUGE)           # (HUGE - time) / dt overflows
+
+
+def test_regression_a_bad_command_time_is_a_rejected_command():
+    engine = SimulationEngine()
+    with pytest.raises(CommandRejected, match='command time'):
+        engine.command_omega(1.0, at=math.nan)
+    assert engine.rejected_commands == 1 and engine.setpoint == 0.0
+    with pytest.raises(ValueError, match='t must be finite'):
+        engine.advance_to(math.inf)

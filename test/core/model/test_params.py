@@ -1,10 +1,26 @@
 import math
+import re
 
 import numpy as np
 import pytest
+from hypothesis import event, given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    CONTAINERS,
+    EXTREME_FLOATS,
+    NONNEGATIVE_FIELDS,
+    POSITIVE_FIELDS,
+    TINY,
+    WRONG_TYPES,
+    finite,
+    is_number,
+    props,
+    rod_fields,
+)
 from reference import I_AREA, W0, K
 
 from rotrod_core import RodParams, disk_inertia
+from rotrod_core.model.equations import Coefficients
 
 
 def test_table1_derived_values():
@@ -78,3 +94,77 @@ def test_batch_fields_and_bad_array_entries():
         RodParams(mass=np.array([0.3, -0.1]))
     with pytest.raises(ValueError, match='broadcast'):
         RodParams(mass=np.ones(3) * 0.3, eccentricity=np.ones(2) * 0.1)
+
+
+DERIVED = ('second_moment_radial', 'second_moment_tangential', 'stiffness_radial',
+           'stiffness_tangential', 'natural_frequency_radial', 'natural_frequency_tangential')
+
+
+def check_rod(p: RodParams):
+    """Every derived quantity of a valid RodParams is finite, > 0 (damping >= 0)."""
+    for name in DERIVED:
+        value = getattr(p, name)
+        assert finite(value) and np.all(np.asarray(value) > 0), (name, value)
+    for name in ('damping_radial', 'damping_tangential'):
+        value = getattr(p, name)
+        assert finite(value) and np.all(np.asarray(value) >= 0), (name, value)
+    co = Coefficients.from_params(p)
+    for name, value in vars(co).items():
+        assert finite(value), (name, value)
+    assert np.all(co.w1sq > 0) and np.all(co.w2sq > 0)
+
+
+@props(400)
+@given(rod_fields())
+def test_rod_params_are_refused_clearly_or_derive_finite_positive_quantities(fields):
+    """RodParams(**fields): a ValueError naming the field, or all derived values finite."""
+    try:
+        p = RodParams(**fields)
+    except ValueError as exc:
+        event('refused')
+        message = str(exc)
+        assert message.startswith('RodParams')
+        named = [f for f in (*POSITIVE_FIELDS, *NONNEGATIVE_FIELDS, 'section',
+                             'section_width', 'section_thickness') if f in message]
+        assert named, message
+        return
+    check_rod(p)
+
+
+@props(150)
+@given(st.sampled_from(POSITIVE_FIELDS + NONNEGATIVE_FIELDS),
+       st.one_of(EXTREME_FLOATS, WRONG_TYPES, CONTAINERS))
+def test_one_bad_field_is_named_in_the_error(name, value):
+    """A single extreme value is either refused naming that field, or is harmless.
+    (A sequence of numbers is a batch of systems, by design.)"""
+    try:
+        p = RodParams(**{name: value})
+    except ValueError as exc:
+        assert re.match(rf'RodParams(\.{name}\b|: .*\b{name}\b)', str(exc)), str(exc)
+        return
+    assert is_number(value) or value == (1.0, 2.0)
+    check_rod(p)
+
+
+def test_regression_rod_params_whose_derived_values_overflow_or_vanish_are_refused():
+    # d^4 overflowed: the stiffness was inf; d^4 underflowed: k = 0, w0 = 0; l^3
+    # overflowed as a Python float: OverflowError
+    for fields in ({'rod_diameter': 1e300}, {'rod_diameter': 1e-100},
+                   {'youngs_modulus': TINY}, {'rod_length': 1e-200}, {'rod_length': 1e150},
+                   {'mass': 1e-320}):
+        with pytest.raises(ValueError, match='RodParams'):
+            RodParams(**fields)
+    # k m overflowed (sqrt(k m) = inf), and with damping_ratio = 0 the damping was 0 x inf
+    heavy = RodParams(mass=1e300, youngs_modulus=1e300, rod_diameter=1.0)
+    assert heavy.damping_radial == 0.0 and heavy.damping_tangential == 0.0
+    assert finite(heavy.replace(damping_ratio=0.1).damping_radial)
+
+
+@props(60)
+@given(st.lists(st.floats(1e-3, 10.0), min_size=1, max_size=4),
+       st.sampled_from([1e300, TINY, 1e-100]))
+def test_a_batch_with_one_unusable_system_is_refused(masses, diameter):
+    diameters = np.full(len(masses), 0.003)
+    diameters[-1] = diameter
+    with pytest.raises(ValueError, match='RodParams'):
+        RodParams(mass=np.array(masses), rod_diameter=diameters)

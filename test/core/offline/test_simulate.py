@@ -1,9 +1,21 @@
 """The integrators against exact solutions, a tight reference and the paper's facts."""
 
 import math
+import re
 
 import numpy as np
 import pytest
+from hypothesis import event, given
+from hypothesis import strategies as st
+from properties import (  # the shared settings and strategies of the property tests
+    LAB,
+    anything,
+    finite,
+    is_number,
+    profiles,
+    props,
+    rod_fields,
+)
 from reference import (
     R0,
     W0,
@@ -21,6 +33,8 @@ from rotrod_core import (
     StepProfile,
     simulate,
 )
+from rotrod_core.numerics.checks import NonFiniteStateError
+from rotrod_core.offline.simulate import time_grid
 
 
 @pytest.fixture(scope='module')
@@ -176,3 +190,62 @@ def test_inertial_position_moves_with_the_absolute_velocity(eq26_run):
     assert np.allclose(np.gradient(r.x, r.t)[inner], vx[inner], atol=1e-6)
     assert np.allclose(np.gradient(r.y, r.t)[inner], vy[inner], atol=1e-6)
     assert np.allclose(np.hypot(r.x, r.y), np.hypot(R0 + r.u, r.v), atol=1e-15)
+
+
+@props(100)
+@given(anything(st.floats(0.01, 1.0)), anything(st.floats(1e-3, 0.01)))
+def test_time_grid_is_a_value_error_or_finite(t_end, dt):
+    """A grid 0, dt, ..., t_end, or a ValueError naming t_end or dt."""
+    try:
+        t = time_grid(t_end, dt)
+    except ValueError as exc:
+        assert re.search(r't_end|dt', str(exc)), str(exc)
+        return
+    assert finite(t) and t[0] == 0.0 and t[-1] == t_end and np.all(np.diff(t) > 0)
+
+
+def test_regression_time_grid_whose_step_count_overflows():
+    # t_end / dt = inf: math.ceil raised OverflowError
+    with pytest.raises(ValueError, match='steps exceeds'):
+        time_grid(1e300, 1e-300)
+    with pytest.raises(ValueError, match='steps exceeds'):
+        simulate(RodParams(), Eq26Profile(), 1e300, dt=1e-300)
+
+
+@props(60)
+@given(rod_fields(sane_only=True, ranges=LAB), st.sampled_from(['exact', 'paper']),
+       anything(st.floats(-1.0, 1.0)),
+       st.dictionaries(st.sampled_from(['u', 'v', 'du', 'dv', 'theta', 'omega']),
+                       anything(st.floats(-1e-3, 1e-3)), max_size=2))
+def test_offline_torque_runs_are_finite_or_a_clear_error(fields, coupling, torque, initial):
+    """simulate(torque=Q, initial=...): ValueError for bad input (incl. no rotary
+    inertia), NonFiniteStateError for a run that overflows, else finite histories."""
+    params = RodParams(**fields)
+    try:
+        run = simulate(params, torque=torque, t_end=0.05, dt=1e-3, coupling=coupling,
+                       initial=initial)
+    except ValueError as exc:
+        event('refused')
+        assert str(exc)
+        return
+    except NonFiniteStateError as exc:
+        event('overflow')
+        assert 'non-finite' in str(exc)
+        return
+    event('finite')
+    assert is_number(torque) and all(is_number(x) for x in initial.values())
+    for name in ('u', 'v', 'du', 'dv', 'theta', 'omega', 'omega_dot', 'torque', 'x', 'y'):
+        assert finite(getattr(run, name)), name
+
+
+@props(30)
+@given(rod_fields(sane_only=True), profiles(sane_only=True))
+def test_short_offline_runs_are_finite_or_refused(fields, spec):
+    cls, kwargs = spec
+    params = RodParams(**fields)
+    try:
+        run = simulate(params, cls(**kwargs), 0.2, dt=5e-3)
+    except NonFiniteStateError:
+        return
+    for name in ('u', 'v', 'du', 'dv', 'theta', 'omega', 'omega_dot', 'torque', 'x', 'y'):
+        assert finite(getattr(run, name)), name
