@@ -3,7 +3,7 @@
 Generated from the tables the nodes create their interfaces and declare their
 parameters from.
 
-``test/test_nodes_doc.py`` fails when the file is not what this prints.
+``test/ros/test_nodes_doc.py`` fails when the file is not what this prints.
 """
 
 from __future__ import annotations

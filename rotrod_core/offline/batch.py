@@ -15,7 +15,7 @@ Torque drive: classical RK4 at the fixed step ``dt`` (default 1 ms), vectorised 
 the systems: its error is O(dt^4); for the paper's rod at 1 ms it is ~1e-14 m in
 the deflection over 40 s of a velocity-drive run (``bench/bench_core.py``) and the
 exact coupling conserves angular momentum to 1e-10 relative or better
-(``test/test_dynamics.py``). Check a torque-drive batch by halving ``dt``.
+(``test/core/offline/test_batch.py``). Check a torque-drive batch by halving ``dt``.
 
 Parallelism: locally, blocks of systems run on ``workers`` forked processes (from a
 single-threaded caller; otherwise in this process): velocity drive writes into shared

@@ -1,0 +1,80 @@
+"""The main job (``rotrod demo``: simulator, profile publisher and Rerun logger) as real
+processes."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rotrod_core import Eq26Profile, RodParams, simulate
+from rotrod_core.analysis.alignment import profile_delay
+from rotrod_core.reporting import recording
+from rotrod_ros.install import executable
+
+pytestmark = pytest.mark.ros
+
+
+def verify(path) -> str:
+    """``rerun rrd verify``: exit 0 and one file verified (a truncated file says 0)."""
+    rerun = executable('rerun')
+    out = subprocess.run([*rerun, 'rrd', 'verify', str(path)], capture_output=True,
+                         text=True, timeout=60)
+    text = out.stdout + out.stderr
+    assert out.returncode == 0 and '1 file verified without error' in text, text
+    return text
+
+
+def test_the_main_job_end_to_end(tmp_path):
+    """``rotrod demo``: Eq. 26 through the three nodes; the recording is read back."""
+    out = tmp_path / 'demo' / 'rotrod.rrd'
+    run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)], capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    for stage in ('spin-up', 'hold', 'spin-down', 'rest'):
+        assert stage in run.stdout
+    assert f'recording: {out}' in run.stdout
+    verify(out)
+    paths = set(recording.entity_paths(out))
+    for entity in (recording.U, recording.V, recording.OMEGA, recording.TORQUE,
+                   recording.F_MODEL, recording.ROTATING_TIP, recording.INERTIAL_TIP):
+        assert '/' + entity in paths
+    t, w = recording.read_series(out, recording.OMEGA)
+    tu, u = recording.read_series(out, recording.U)
+    _, v = recording.read_series(out, recording.V)
+    profile = Eq26Profile()
+    shift = profile_delay(t, w, profile)
+    keep = (tu - shift >= 0) & (tu - shift <= 40.0)
+    tt = tu[keep] - shift
+    assert tt[-1] - tt[0] > 39.5                       # the whole 40 s are recorded
+    # the recording begins at most 1 s before the profile (it began up to 15 s before)
+    assert 0 <= shift - min(t[0], tu[0]) <= 1.0, (shift, t[0], tu[0])
+    assert 'the profile starts' in run.stdout
+    offline = simulate(RodParams(), profile, 40.0, dt=1e-3)
+    du = np.max(np.abs(u[keep] - np.interp(tt, offline.t, offline.u)))
+    dv = np.max(np.abs(v[keep] - np.interp(tt, offline.t, offline.v)))
+    assert du <= 0.01 * np.max(offline.u)             # the simulator issue's tolerances
+    assert dv <= 0.05 * np.max(np.abs(offline.v))
+    _, f = recording.read_series(out, recording.F_MODEL)
+    assert f.shape[1] == 2
+    # the estimate from the motion, stamped at the end of its 1 s window, tracks Eq. 28
+    # at the window's middle during the spin-up once the window has filled (issue 6: 2 %)
+    te, fe = recording.read_series(out, recording.F_ESTIMATE)
+    middle = te - shift - 0.5
+    spin_up = (middle >= 0.5) & (middle <= 14.5)
+    w0 = RodParams().natural_frequency
+    w_mid = profile.omega(middle[spin_up])
+    model = np.column_stack(((w0 - w_mid) / (2 * np.pi), (w0 + w_mid) / (2 * np.pi)))
+    given = np.isfinite(fe[spin_up])
+    # NaN where a window is not stationary: the spin-up's own whirls are ~0.1 um, and
+    # small corrections of the streamed w (delivery hiccups) start new ones
+    # (26-65 % measured across runs of the same code, depending on the stream's hiccups)
+    print(f"estimates given in {given.mean():.0%} of the spin-up windows")
+    assert given.mean() >= 0.2, given.mean()
+    assert np.max(np.abs(fe[spin_up][given] / model[given] - 1)) <= 0.02
+
+
+def test_demo_is_a_module_too():
+    out = subprocess.run([sys.executable, '-m', 'rotrod_ros.demo', '--help'],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and '--real-time' in out.stdout

@@ -1,0 +1,280 @@
+"""Build the package with colcon, as a ROS user would, and check the installed tree.
+
+The repository's source files (``git ls-files --cached --others --exclude-standard``, so
+nothing from ``.venv``/``build``) are copied to ``<tmp>/ws/src/rotrod`` and built with
+``colcon build --base-paths src`` using this interpreter's colcon and setuptools. Then,
+with the environment computed from the install tree's colcon ``.dsv`` hooks (nothing is
+sourced) and from a directory outside the repository:
+
+* ``ament_index_python.get_package_prefix('rotrod')`` is the install prefix, and
+  ``rotrod_core`` resolves to the install tree, not the source tree;
+* every console script declared in setup.py's ``CONSOLE_SCRIPTS`` (parsed with ``ast``;
+  compared with the installed ``entry_points.txt``) is an executable
+  ``<prefix>/lib/rotrod/<name>`` that runs ``--help`` with exit status 0, importing only
+  installed ``rotrod_*`` modules;
+* ``share/rotrod/package.xml``, ``share/rotrod/config/`` (with every ``config/*.yaml``),
+  ``share/rotrod/urdf/rotrod.urdf`` and the ament resource marker
+  ``share/ament_index/resource_index/packages/rotrod`` exist.
+"""
+
+import configparser
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+import warnings
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+import setup_py
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[2]
+PACKAGE = 'rotrod'
+EXCLUDED_DIRS = {'.git', '.venv', 'build', 'install', 'log', '__pycache__', '.pytest_cache',
+                 '.ruff_cache', '.hypothesis'}
+
+
+def declared_console_scripts() -> dict:
+    """``{name: 'module:function'}`` from setup.py's ``CONSOLE_SCRIPTS`` list (via ast)."""
+    scripts = setup_py.constants().get('CONSOLE_SCRIPTS')
+    assert scripts is not None, 'setup.py has no module-level CONSOLE_SCRIPTS list'
+    return parse_entry_points(scripts)
+
+
+def parse_entry_points(lines) -> dict:
+    out = {}
+    for line in lines:
+        name, sep, target = line.partition('=')
+        assert sep, f'malformed console script {line!r}'
+        assert name.strip() not in out, f'duplicate console script {name.strip()!r}'
+        out[name.strip()] = re.sub(r'\s+', '', target)
+    return out
+
+
+def source_files() -> list:
+    """Repository files a checkout would contain (relative paths)."""
+    try:
+        proc = subprocess.run(
+            ['git', 'ls-files', '-z', '--cached', '--others', '--exclude-standard'],
+            cwd=ROOT, capture_output=True, check=True, timeout=60)
+        files = [f for f in proc.stdout.decode().split('\0') if f]
+    except (OSError, subprocess.CalledProcessError):
+        # Not a git checkout (e.g. a source archive): everything but build products.
+        files = []
+        for dirpath, dirnames, filenames in os.walk(ROOT):
+            dirnames[:] = [d for d in dirnames
+                           if d not in EXCLUDED_DIRS and not d.endswith('.egg-info')]
+            rel = Path(dirpath).relative_to(ROOT)
+            files += [str(rel / f) for f in filenames if not f.endswith('.pyc')]
+    return [f for f in files if (ROOT / f).is_file()]
+
+
+def environment_from_install(prefix: Path, base: dict) -> dict:
+    """Apply the colcon ``.dsv`` hooks of ``<prefix>/share/rotrod/package.dsv`` to ``base``."""
+    env = dict(base)
+
+    def apply(dsv: Path) -> None:
+        for line in dsv.read_text().splitlines():
+            if not line.strip():
+                continue
+            kind, _, rest = line.partition(';')
+            if kind == 'source':
+                if rest.endswith('.dsv'):
+                    apply(prefix / rest)
+                continue
+            name, _, values = rest.partition(';')
+            paths = [str(prefix / v) if v else str(prefix) for v in values.split(';')]
+            if kind.endswith('-if-exists'):
+                paths = [p for p in paths if os.path.exists(p)]
+            current = [p for p in env.get(name, '').split(os.pathsep) if p]
+            if kind.startswith('prepend-non-duplicate'):
+                env[name] = os.pathsep.join(paths + [p for p in current if p not in paths])
+            elif kind.startswith('append-non-duplicate'):
+                env[name] = os.pathsep.join([p for p in current if p not in paths] + paths)
+            elif kind == 'set' or (kind == 'set-if-unset' and not env.get(name)):
+                env[name] = os.pathsep.join(paths)
+
+    apply(prefix / 'share' / PACKAGE / 'package.dsv')
+    return env
+
+
+def _tail(text: str, n: int = 60) -> str:
+    return '\n'.join(text.splitlines()[-n:])
+
+
+@pytest.fixture(scope='module')
+def colcon_install(tmp_path_factory):
+    """Build into a temporary workspace once per module; return its facts."""
+    tmp = tmp_path_factory.mktemp('colcon')
+    ws = tmp / 'ws'
+    src = ws / 'src' / PACKAGE
+    files = source_files()
+    assert 'package.xml' in files and 'setup.py' in files
+    for rel in files:
+        (src / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(ROOT / rel, src / rel)
+
+    colcon = Path(sys.executable).parent / 'colcon'
+    if not colcon.exists():
+        found = shutil.which('colcon')
+        assert found, 'colcon is not installed (pip install -e ".[dev]")'
+        colcon = Path(found)
+    env = dict(os.environ)
+    env['COLCON_HOME'] = str(tmp / 'colcon_home')  # ignore the user's colcon defaults
+    cmd = [str(colcon), '--log-base', str(ws / 'log'), 'build', '--base-paths', 'src',
+           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
+           '--event-handlers', 'console_direct+']
+    t0 = time.monotonic()
+    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True, timeout=600,
+                          check=False)
+    build_seconds = time.monotonic() - t0
+    output = proc.stdout + proc.stderr
+    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
+
+    setuptools_version = metadata.version('setuptools')
+    print(f'colcon build: {build_seconds:.1f} s with setuptools {setuptools_version}')
+    constraints = ROOT / 'constraints.txt'
+    if constraints.is_file():
+        pin = re.search(r'^setuptools==(\S+)', constraints.read_text(), re.MULTILINE)
+        if pin and pin.group(1) != setuptools_version:
+            warnings.warn(f'built with setuptools {setuptools_version}, but constraints.txt '
+                          f'pins {pin.group(1)}', stacklevel=1)
+    build_warnings = sorted({line.strip() for line in output.splitlines()
+                             if re.search(r'warning:', line, re.IGNORECASE)
+                             and 'byte-compiling is disabled' not in line})
+    for line in build_warnings:
+        print(f'  build warning: {line}')
+    if build_warnings:
+        warnings.warn('colcon build of rotrod printed warnings: ' + ' | '.join(build_warnings),
+                      stacklevel=1)
+
+    prefix = ws / 'install' / PACKAGE
+    base = {k: v for k, v in os.environ.items()
+            if k not in ('AMENT_PREFIX_PATH', 'PYTHONPATH', 'COLCON_PREFIX_PATH')}
+    elsewhere = tmp / 'elsewhere'
+    elsewhere.mkdir()
+    return {'ws': ws, 'prefix': prefix, 'env': environment_from_install(prefix, base),
+            'cwd': elsewhere, 'seconds': build_seconds}
+
+
+PROBE = '''
+import importlib.metadata, json, sys
+from ament_index_python.packages import get_package_prefix, get_package_share_directory
+import rotrod_core
+dist = importlib.metadata.distribution('rotrod')
+print(json.dumps({
+    'prefix': get_package_prefix('rotrod'),
+    'share': get_package_share_directory('rotrod'),
+    'rotrod_core': rotrod_core.__file__,
+    'metadata': str(getattr(dist, '_path', '')),
+    'console_scripts': {ep.name: ep.value for ep in dist.entry_points
+                        if ep.group == 'console_scripts'},
+}))
+'''
+
+# Runs an installed script in-process (as its shebang interpreter would) to see which
+# rotrod modules it imported.
+RUN_SCRIPT = '''
+import json, runpy, sys
+script = sys.argv[1]
+sys.argv = [script, '--help']
+code = 0
+try:
+    runpy.run_path(script, run_name='__main__')
+except SystemExit as exc:
+    code = exc.code
+mods = {name: getattr(mod, '__file__', None) for name, mod in list(sys.modules.items())
+        if name.partition('.')[0] in ('rotrod_core', 'rotrod_ros')}
+sys.stdout.flush()
+print('@@PROBE@@' + json.dumps({'code': code, 'modules': mods}), file=sys.__stderr__)
+'''
+
+
+def _under(path, root: Path) -> bool:
+    return path is not None and Path(path).resolve().is_relative_to(root.resolve())
+
+
+def test_ament_index_and_import_resolve_to_install(colcon_install):
+    prefix = colcon_install['prefix']
+    proc = subprocess.run([sys.executable, '-c', PROBE], cwd=colcon_install['cwd'],
+                          env=colcon_install['env'], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr
+    info = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert Path(info['prefix']).resolve() == prefix.resolve()
+    assert Path(info['share']).resolve() == (prefix / 'share' / PACKAGE).resolve()
+    assert _under(info['rotrod_core'], prefix), f'rotrod_core from {info["rotrod_core"]}'
+    assert not _under(info['rotrod_core'], ROOT)
+    if info['metadata']:
+        assert _under(info['metadata'], prefix), info['metadata']
+    assert info['console_scripts'] == declared_console_scripts()
+
+
+def test_data_files_installed(colcon_install):
+    prefix = colcon_install['prefix']
+    share = prefix / 'share' / PACKAGE
+    assert (share / 'package.xml').read_text() == (ROOT / 'package.xml').read_text()
+    assert (share / 'config').is_dir()
+    source_configs = {p.name for p in (ROOT / 'config').glob('*.yaml')}
+    installed_configs = {p.name for p in (share / 'config').glob('*.yaml')}
+    assert installed_configs == source_configs
+    assert {p.name for p in (share / 'urdf').glob('*.urdf')} == {'rotrod.urdf'}
+    urdf = Path('urdf') / 'rotrod.urdf'
+    assert (share / urdf).read_text() == (ROOT / urdf).read_text()
+    marker = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages' / PACKAGE
+    assert marker.is_file()
+
+
+def test_console_scripts_installed_and_run(colcon_install):
+    prefix = colcon_install['prefix']
+    declared = declared_console_scripts()
+    print(f'console scripts declared in setup.py: {", ".join(sorted(declared)) or "none"}')
+    assert declared, 'setup.py declares no console scripts'
+
+    egg_infos = list(prefix.glob(f'lib/python*/site-packages/{PACKAGE}-*.egg-info'))
+    assert len(egg_infos) == 1, egg_infos
+    parser = configparser.ConfigParser(delimiters=('=',))
+    parser.optionxform = str
+    parser.read(egg_infos[0] / 'entry_points.txt')
+    installed = parse_entry_points(f'{k} = {v}' for k, v in parser['console_scripts'].items())
+    assert installed == declared
+
+    lib_dir = prefix / 'lib' / PACKAGE
+    assert sorted(p.name for p in lib_dir.iterdir()) == sorted(declared)
+
+    env, cwd = colcon_install['env'], colcon_install['cwd']
+    for name, target in sorted(declared.items()):
+        exe = lib_dir / name
+        assert exe.is_file() and os.access(exe, os.X_OK), f'{exe} is not executable'
+        shebang = exe.read_text().splitlines()[0]
+        assert shebang.startswith('#!'), f'{exe}: no shebang'
+        interpreter = shebang[2:].strip().split()[0]
+
+        t0 = time.monotonic()
+        proc = subprocess.run([str(exe), '--help'], cwd=cwd, env=env, capture_output=True,
+                              text=True, timeout=120, check=False)
+        seconds = time.monotonic() - t0
+        assert proc.returncode == 0, (
+            f'{name} --help failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}')
+        assert proc.stdout.strip(), f'{name} --help printed nothing'
+        print(f'  {name} = {target}: {exe} --help ok ({seconds:.2f} s): '
+              f'{proc.stdout.strip().splitlines()[0]}')
+
+        # Same script, same interpreter and environment: which modules did it import?
+        proc = subprocess.run([interpreter, '-c', RUN_SCRIPT, str(exe)], cwd=cwd, env=env,
+                              capture_output=True, text=True, timeout=120, check=False)
+        lines = [ln for ln in proc.stderr.splitlines() if ln.startswith('@@PROBE@@')]
+        assert lines, f'{name}: probe failed:\n{proc.stderr}'
+        probe = json.loads(lines[-1][len('@@PROBE@@'):])
+        assert probe['code'] in (0, None), probe
+        module = target.partition(':')[0]
+        assert module in probe['modules'], f'{name} did not import {module}'
+        for mod, path in probe['modules'].items():
+            if path is not None:
+                assert _under(path, prefix), f'{name}: {mod} imported from {path}'

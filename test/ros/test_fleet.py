@@ -1,0 +1,86 @@
+"""A fleet of rods from one command (python -m rotrod_ros.fleet), and its launch file.
+
+Three rods, each streamed the paper's Eq. 26 by its own profile publisher: every rod
+publishes in its own namespace and frames at the full rate, and its tip follows the
+quasi-static closed form of its own speed.
+"""
+
+import ast
+import os
+import signal
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import Vector3Stamped
+from node_probes import by_time
+from reference import R0, K, M
+from sensor_msgs.msg import JointState
+
+from rotrod_ros import fleet
+
+ROOT = Path(__file__).resolve().parents[2]
+RODS = 3
+
+
+@pytest.mark.ros
+def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_node,
+                                                            tmp_path):
+    joint = {ns: ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+             for ns in fleet.namespaces(RODS)}
+    deflection = {ns: ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
+                  for ns in fleet.namespaces(RODS)}
+    proc = ros_processes.start([sys.executable, '-m', 'rotrod_ros.fleet', '--rods', str(RODS),
+                                '--profile', '--duration', '120', '--log-dir', str(tmp_path)],
+                               name='fleet')
+    proc.wait_for_output(f'fleet: {RODS} rods running', timeout=60)
+    ros_node.spin_until(lambda: all(j and j[-1].velocity[0] > 1.0 for j in joint.values()),
+                        60, 'every rod spinning up')
+    os.kill(proc.pid, signal.SIGINT)            # Ctrl-C: the fleet stops every node
+    assert proc.wait(timeout=30) == 0
+    for log in tmp_path.glob('rod*_simulator.log'):
+        assert 'ready' in log.read_text()
+    for ns in fleet.namespaces(RODS):
+        rows = by_time(joint[ns], deflection[ns])
+        t, w, u = rows[:, 0], rows[:, 2], rows[:, 4]
+        assert np.max(np.diff(t)) < 0.025                       # 100 Hz, no gap
+        moving = w > 0.3
+        assert moving.sum() > 100
+        # Eq. 26 is slow against w0: the tip sits at u_s = m w^2 r0 / (k - m w^2)
+        u_s = M * w[moving] ** 2 * R0 / (K - M * w[moving] ** 2)
+        assert np.max(np.abs(u[moving] - u_s)) < 0.01 * np.max(u_s) + 2e-6
+        assert {m.header.frame_id for m in deflection[ns]} == {f'{ns[1:]}/rotor'}
+
+
+def test_bad_fleet_sizes_are_refused_with_the_reason():
+    for rods in (0, -1, fleet.MAX_RODS + 1, 2.5, True):
+        with pytest.raises(ValueError, match='rods must be an integer'):
+            fleet.namespaces(rods)
+    with pytest.raises(SystemExit) as exc:
+        fleet.main(['--rods', '0'])
+    assert exc.value.code == 2
+
+
+def test_fleet_commands_name_every_rod_its_namespace_files_and_frames():
+    cmds = fleet.fleet_commands(2, profile=True)
+    assert sorted(cmds) == ['rod0_profile_publisher', 'rod0_simulator',
+                            'rod1_profile_publisher', 'rod1_simulator']
+    sim = cmds['rod1_simulator']
+    assert '__ns:=/rod1' in sim and 'frame_prefix:=rod1/' in sim
+    files = [sim[i + 1] for i, a in enumerate(sim) if a == '--params-file']
+    assert [Path(f).name for f in files] == ['table1.yaml', 'fleet.yaml']
+
+
+def test_fleet_launch_file_starts_the_same_nodes_with_the_same_files():
+    launch = ROOT / 'launch' / 'fleet.launch.py'
+    tree = ast.parse(launch.read_text())
+    executables = {ast.literal_eval(kw.value) for node in ast.walk(tree)
+                   if isinstance(node, ast.Call) and getattr(node.func, 'id', '') == 'Node'
+                   for kw in node.keywords if kw.arg == 'executable'}
+    assert executables == {'simulator', 'profile_publisher'}
+    files = [c for c in ast.walk(tree) if isinstance(c, ast.Tuple)
+             and all(isinstance(e, ast.Constant) and str(e.value).endswith('.yaml')
+                     for e in c.elts)]
+    assert [f'config/{e.value}' for e in files[0].elts] == list(fleet.PARAM_FILES)
+    compile(launch.read_text(), str(launch), 'exec')

@@ -1,0 +1,38 @@
+"""The messages the nodes publish: stamps, units, frames and labels."""
+
+import pytest
+
+from rotrod_core import RodParams
+from rotrod_core.model.equations import State
+from rotrod_core.model.geometry import rod_centerline
+from rotrod_ros import messages
+
+
+@pytest.mark.parametrize('t', [0.0, 1.5, 1795321712.418036928, 2.9999999999])
+def test_stamp_round_trip(t):
+    s = messages.stamp(t)
+    assert 0 <= s.nanosec < 1_000_000_000
+    assert messages.to_seconds(s) == pytest.approx(t, abs=1e-9)
+
+
+def test_messages_carry_units_frames_and_labels():
+    t = messages.stamp(1.25)
+    js = messages.joint_state(t, State(1e-3, -2e-4, 0.01, -0.02, 0.5, 2.0), -0.01)
+    assert list(js.name) == ['hub', 'tip_radial', 'tip_tangential']
+    assert list(js.position) == [0.5, 1e-3, -2e-4]
+    assert list(js.velocity) == [2.0, 0.01, -0.02]
+    assert list(js.effort) == [-0.01, 0.0, 0.0]             # the tip joints are passive
+    d = messages.deflection(t, 1e-3, -2e-4, 'rotor')
+    assert d.header.frame_id == 'rotor' and (d.vector.x, d.vector.y, d.vector.z) == (
+        1e-3, -2e-4, 0.0)
+    f = messages.frequencies(1.6, 2.2)
+    assert list(f.data) == [1.6, 2.2] and f.layout.dim[0].label == messages.FREQUENCY_LABEL
+    diag = messages.diagnostics(t, 'sim', 'hw', 1, 'warn', [('u_m', 1e-3), ('drive', 'x')])
+    assert diag.status[0].level == b'\x01'
+    assert [(kv.key, kv.value) for kv in diag.status[0].values] == [('u_m', '0.001'),
+                                                                   ('drive', 'x')]
+    rod = rod_centerline(RodParams(), 1e-3, 0.0, 0.3)
+    arr = messages.markers(t, 'world', 'rotrod', disk_radius=0.15, theta=0.3, rod=rod,
+                           rod_diameter=0.003, mass_radius=0.02, trail=[rod[-1], rod[-1]])
+    assert [m.id for m in arr.markers] == [0, 1, 2, 3, 4]
+    assert all(m.header.frame_id == 'world' for m in arr.markers)

@@ -1,0 +1,105 @@
+"""The profile publisher, as a real process."""
+
+import os
+import time
+
+import pytest
+from builtin_interfaces.msg import Time
+from node_probes import namespace
+from reference import eq26
+from ros_harness import ros_arguments
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Float64
+
+from rotrod_ros.profile_publisher import MATCH_SETTLE
+
+pytestmark = pytest.mark.ros
+
+
+def test_profile_publisher_waits_streams_the_profile_and_exits(ros_processes, ros_node,
+                                                               request):
+    ns = namespace(request)
+    pub = ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        namespace=ns, params={'profile': 'eq26', 'period': 0.5, 'rate': 100.0,
+                              'duration': 2.0}))
+    pub.wait_for_output('waiting for a subscriber', timeout=30)
+    time.sleep(0.5)
+    assert pub.running                                   # nobody listening: it waits
+    subscribed = time.monotonic()
+    got, arrived = [], []
+    ros_node.node.create_subscription(Float64, f'{ns}/cmd/omega', lambda m: (
+        got.append(m), arrived.append(time.monotonic())), 1000)
+    ros_node.spin_until(lambda: pub.poll() is not None, 30, 'the publisher exits')
+    ros_node.spin_for(0.3)
+    assert pub.returncode == 0
+    assert 'start: streaming eq26' in pub.output and 'end: published 201 samples' in pub.output
+    if os.geteuid() == 0:                                # permitted: real-time priority
+        assert 'streaming at SCHED_FIFO priority 50' in pub.output
+    # the sender lets the subscriber match it too before it starts: no start burst
+    assert arrived[0] - subscribed >= MATCH_SETTLE
+    assert arrived[19] - arrived[0] >= 0.15             # 19 intervals of 10 ms, not together
+    values = [m.data for m in got]
+    assert len(values) == 201
+    expected = [eq26(k / 100.0, T=0.5)[0] for k in range(201)]   # MODEL.md, sample k
+    assert values == pytest.approx(expected, abs=1e-12)
+
+
+def test_profile_publisher_follows_the_sim_clock(ros_processes, ros_node, request):
+    ns = namespace(request)
+    clock = ros_node.node.create_publisher(Clock, '/clock', 10)
+    pub = ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        namespace=ns, params={'profile': 'ramp', 'omega_target': 1.0, 'ramp_time': 1.0,
+                              'rate': 20.0, 'use_sim_time': True}))
+    got = ros_node.subscribe(f'{ns}/cmd/omega', Float64, qos=1000)
+    sim = 1.0
+    deadline = None
+    start = time.monotonic()
+    while deadline is None or time.monotonic() < deadline:
+        sim += 0.0025                          # simulated time at a quarter of wall time
+        clock.publish(Clock(clock=Time(sec=int(sim), nanosec=int(sim % 1 * 1e9))))
+        ros_node.spin_for(0.01)
+        if deadline is None and got:           # the stream has started (process is up)
+            deadline = time.monotonic() + 2.0
+        assert time.monotonic() < start + 30, 'no sample within 30 s'
+    # about 0.5 s of simulated time since the first sample: ~11 of the 21, not all
+    assert 5 <= len(got) <= 15, len(got)
+    assert pub.running
+    while pub.poll() is None and time.monotonic() < deadline + 30:
+        sim += 0.01
+        clock.publish(Clock(clock=Time(sec=int(sim), nanosec=int(sim % 1 * 1e9))))
+        ros_node.spin_for(0.01)
+    ros_node.spin_for(0.3)
+    assert pub.returncode == 0
+    assert [m.data for m in got] == pytest.approx([k / 20 for k in range(21)], abs=1e-12)
+
+
+def test_profile_publisher_holds_or_loops_when_asked(ros_processes, ros_node, request):
+    ns = namespace(request)
+    hold = ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        namespace=ns + '_hold', params={'profile': 'constant', 'omega_target': 0.7,
+                                        'rate': 50.0, 'hold': True}))
+    loop = ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        namespace=ns + '_loop', params={'profile': 'ramp', 'omega_target': 1.0,
+                                        'ramp_time': 0.2, 'rate': 50.0, 'loop': True}))
+    held = ros_node.subscribe(f'{ns}_hold/cmd/omega', Float64, qos=1000)
+    looped = ros_node.subscribe(f'{ns}_loop/cmd/omega', Float64, qos=1000)
+    ros_node.spin_until(lambda: len(held) > 50 and len(looped) > 50, 20, 'streams')
+    assert hold.running and loop.running
+    assert {m.data for m in held} == {0.7}
+    v = [m.data for m in looped]
+    assert v.count(0.0) >= 3 and v.count(1.0) >= 3      # the ramp starts over
+
+
+@pytest.mark.parametrize('params, reason', [
+    ({'profile': 'spiral'}, 'profile must be one of'),
+    ({'profile': 'table'}, 'table_file'),
+    ({'profile': 'eq26', 'period': -1.0}, 'period'),
+    ({'rate': 0.0}, 'rate must be > 0'),
+    ({'realtime_priority': 100}, 'realtime_priority'),
+    ({'realtime_priority': 5.0}, 'realtime_priority'),
+])
+def test_profile_publisher_refuses_bad_parameters(ros_processes, params, reason):
+    proc = ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        params=params))
+    assert proc.wait(timeout=30) == 2
+    assert 'invalid configuration' in proc.output and reason in proc.output

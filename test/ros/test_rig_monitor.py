@@ -1,0 +1,50 @@
+"""The rig monitor node: identification of a real rig from its motion, live (issue 20).
+
+The rig is Table 1 upright under gravity with a steel rod (config/real_rig.yaml); the
+monitor is configured with the paper's Table 1. Its natural frequency and stiffness are
+written out here from docs/real_rig.md, not taken from rotrod."""
+
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from node_probes import namespace, omega_publisher, stamp, start_simulator
+from reference import W0_RIG
+from ros_harness import ros_arguments
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, Float64MultiArray
+
+from rotrod_core.estimation.monitor import ESTIMATE_FIELDS
+
+FIELD = {name: i for i, (name, _) in enumerate(ESTIMATE_FIELDS)}
+
+
+@pytest.mark.ros
+def test_live_the_monitor_finds_the_real_rig_within_10_s_of_a_spin_up(
+        ros_processes, ros_node, request):
+    ns = namespace(request)
+    start_simulator(ros_processes, ns, 'table1.yaml', 'real_rig.yaml', real_time_factor=2.0,
+                    deflection_noise=1e-5, noise_seed=7)
+    monitor = ros_processes.start_console_script(
+        'rig_monitor', *ros_arguments(namespace=ns), name='rig_monitor')   # Table 1
+    monitor.wait_for_output('ready: identifying', timeout=30)
+    estimates = ros_node.subscribe(f'{ns}/rig/estimate', Float64MultiArray, qos=1000)
+    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+    diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=1000)
+    ros_node.spin_for(2.0)
+    omega_publisher(ros_node, ns).publish(Float64(data=2.0))
+    ros_node.spin_until(lambda: any(m.velocity[0] > 0 for m in joint), 20, 'spin-up')
+    start = min(stamp(m) for m in joint if m.velocity[0] > 0)
+    ros_node.spin_until(lambda: estimates and
+                        estimates[-1].data[FIELD['window_end']] >= start + 10.0, 60,
+                        'estimates 10 s into the spin-up')
+    label = estimates[-1].layout.dim[0].label
+    assert label.startswith('natural_frequency[rad/s],natural_frequency_std[rad/s]')
+    by_10_s = [m for m in estimates if m.data[FIELD['window_end']] <= start + 10.0]
+    assert by_10_s
+    w0 = by_10_s[-1].data[FIELD['natural_frequency']]
+    assert w0 == pytest.approx(W0_RIG, rel=5e-3)                   # the issue's 0.5 %
+    ours = [s for d in diags for s in d.status
+            if s.name.startswith(f'{ns}/rotrod_rig_monitor')]
+    assert ours[-1].level == DiagnosticStatus.WARN
+    assert 'off the nominal 44.18 N/m' in ours[-1].message
+    assert 'identified critical speed' in ours[-1].message         # at 2 rad/s, past 1.75
