@@ -7,14 +7,14 @@
     .venv/bin/python bench/run_all.py --no-write      # full run, docs/performance.md untouched
 
 Runs bench_core.py, bench_sweep.py, bench_estimator.py, bench_planner.py,
-bench_identify.py, bench_realtime.py and bench_fleet.py one after the other, each as its own process writing its rows as JSON
-(bench/results.py); their own tables go to stderr. The combined table, stamped with the
-date, the machine, the load average at start, the code measured and this command, goes
-to stdout and replaces what lies between ``<!-- bench:begin -->`` and ``<!-- bench:end
--->`` in docs/performance.md; nothing outside the markers is touched. A bench that
-fails, or a row with a missing value, stops the run before docs/performance.md is
-written. Exit status: 0 when every target is met, 1 when some target is not
-(docs/performance.md is still written), 2 on an error.
+bench_identify.py, bench_realtime.py and bench_fleet.py one after the other, each as its
+own process writing its rows as JSON (bench/results.py); their own tables go to stderr.
+The combined table, stamped with the date, the machine, the load average at start, the
+code measured and this command, goes to stdout and replaces what lies between ``<!--
+bench:begin -->`` and ``<!-- bench:end -->`` in docs/performance.md; nothing outside the
+markers is touched. A bench that fails, or a row with a missing value, stops the run
+before docs/performance.md is written. Exit status: 0 when every target is met, 1 when
+some target is not (docs/performance.md is still written), 2 on an error.
 """
 
 from __future__ import annotations
