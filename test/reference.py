@@ -1,4 +1,4 @@
-"""Independent reference formulas from MODEL.md, written apart from rotrod_core's code."""
+"""Independent reference formulas from docs/model.md, written apart from rotrod_core's code."""
 
 import math
 
@@ -57,7 +57,7 @@ def reference_run(omega, omega_dot, t_eval, w0=W0, r0=R0, rtol=1e-12, atol=1e-15
 
 
 def eq26(t, T=15.0, W=2.0):
-    """Eq. 26 angular velocity and acceleration at a scalar time (written from MODEL.md)."""
+    """Eq. 26 angular velocity and acceleration at a scalar time (written from docs/model.md)."""
     if t <= T:
         return W * (t / T - math.sin(2 * math.pi * t / T) / (2 * math.pi)), \
             W / T * (1 - math.cos(2 * math.pi * t / T))

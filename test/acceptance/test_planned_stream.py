@@ -1,5 +1,5 @@
 """The planned spin-up streamed through the real executables (issue 19), checked against
-closed forms (MODEL.md), never against rotrod's own output.
+closed forms (docs/model.md), never against rotrod's own output.
 
 The simulator and the profile publisher take the same params files: the rod
 (config/table1.yaml) and the planned spin-up with its acceleration bound
@@ -39,7 +39,7 @@ BOUND = 0.5
 
 
 def static_deflection(w, r0=R0):
-    """MODEL.md: u_s = m w^2 r0 / (k - m w^2), m."""
+    """docs/model.md: u_s = m w^2 r0 / (k - m w^2), m."""
     return M * w * w * r0 / (K - M * w * w)
 
 

@@ -1,5 +1,5 @@
 """What a new user sends first, through the real executables (DDS on this machine only),
-checked against closed forms and invariants (MODEL.md), never against rotrod's output.
+checked against closed forms and invariants (docs/model.md), never against rotrod's output.
 
 Each test is one journey: a 2 rad/s setpoint (the paper's speed) at 10 Hz and once, a
 ramp past the 3 mm critical deflection and a hold there, torque drive and a coast, two
@@ -40,7 +40,7 @@ J_HUB = 0.5 * math.pi * 7850.0 * 0.01 * 0.15**4
 
 
 def static_deflection(w, r0=R0):
-    """MODEL.md: u_s = m w^2 r0 / (k - m w^2), m."""
+    """docs/model.md: u_s = m w^2 r0 / (k - m w^2), m."""
     return M * w * w * r0 / (K - M * w * w)
 
 
@@ -126,7 +126,7 @@ class Observer:
 
 
 def check_settled_at_2_rad_s(sim, obs, t_reached):
-    """The hold at 2 rad/s: centre, whirls and frequencies against MODEL.md; no halt."""
+    """The hold at 2 rad/s: centre, whirls and frequencies against docs/model.md; no halt."""
     hold = obs.hold(t_reached + 1.0)
     assert len(hold) > 500 and np.all(hold[:, 2] == 2.0)
     centre, amplitude, residual = fit_hold(hold, 2.0)
@@ -220,7 +220,7 @@ def test_torque_drive_then_zero_torque_coasts_with_constant_omega_and_momentum(
     rows = obs.rows()
     t, w, q, u, v = rows[:, 0], rows[:, 2], rows[:, 3], rows[:, 4], rows[:, 5]
     du, dv = np.gradient(u, t), np.gradient(v, t)
-    # MODEL.md: L = (J + m rho^2) w + m ((r0 + u) v' - v u'), rho^2 = (r0 + u)^2 + v^2
+    # docs/model.md: L = (J + m rho^2) w + m ((r0 + u) v' - v u'), rho^2 = (r0 + u)^2 + v^2
     momentum = (J_HUB + M * ((R0 + u) ** 2 + v**2)) * w + M * ((R0 + u) * dv - v * du)
     coast = (t > t_off + 0.5) & (t < t[-2])       # np.gradient is one-sided at the ends
     L = momentum[coast]

@@ -141,7 +141,7 @@ def test_every_registered_profile_has_a_cli_test():
 
 def test_simulate_planned_arrives_without_whirl_under_its_bounds(tmp_path, capsys):
     """The planned profile offline: |w'| within 0.9 x the bound, |r| under the limit, and
-    the motion after arrival a free whirl about MODEL.md's static deflection no larger
+    the motion after arrival a free whirl about docs/model.md's static deflection no larger
     than the residual asked for."""
     from reference import R0, W0, K, M
     out = tmp_path / 'planned.csv'

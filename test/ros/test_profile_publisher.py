@@ -40,7 +40,7 @@ def test_profile_publisher_waits_streams_the_profile_and_exits(ros_processes, ro
     assert arrived[19] - arrived[0] >= 0.15             # 19 intervals of 10 ms, not together
     values = [m.data for m in got]
     assert len(values) == 201
-    expected = [eq26(k / 100.0, T=0.5)[0] for k in range(201)]   # MODEL.md, sample k
+    expected = [eq26(k / 100.0, T=0.5)[0] for k in range(201)]   # docs/model.md, sample k
     assert values == pytest.approx(expected, abs=1e-12)
 
 

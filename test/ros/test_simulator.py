@@ -50,7 +50,7 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
     rows = by_time(joint, defl)
     hold = rows[rows[:, 0] > t_reached + 1.0]
     assert np.all(hold[:, 2] == 2.0)
-    u_static = M * 4.0 * R0 / (K - M * 4.0)       # MODEL.md u_s = m w^2 r0 / (k - m w^2)
+    u_static = M * 4.0 * R0 / (K - M * 4.0)       # docs/model.md u_s = m w^2 r0 / (k - m w^2)
     assert hann_mean(hold[:, 4]) == pytest.approx(u_static, rel=0.01)
     assert hann_mean(hold[:, 4]) == pytest.approx(2.792e-3, rel=0.01)
     f1, f2 = freq[-1].data
@@ -78,7 +78,7 @@ def test_eq26_streamed_at_100_hz_matches_the_offline_run(ros_processes, ros_node
             while (left := due - time.monotonic()) > 0:
                 ros_node.spin_once(min(left, 0.002))
             late[k] = time.monotonic() - due
-            pub.publish(Float64(data=eq26(k * period)[0]))   # MODEL.md's Eq. 26, sample k
+            pub.publish(Float64(data=eq26(k * period)[0]))   # docs/model.md's Eq. 26, sample k
     finally:
         scheduling.set_current_thread_priority(0)
     ros_node.spin_for(1.0)
@@ -115,7 +115,7 @@ def derivative(x, h):
 
 
 def _momentum_and_energy(rows, J):
-    """L and E (MODEL.md) from published t, w, u, v; u', v' by finite differences."""
+    """L and E (docs/model.md) from published t, w, u, v; u', v' by finite differences."""
     t, w, u, v = rows[:, 0], rows[:, 2], rows[:, 4], rows[:, 5]
     h = np.diff(t)
     assert np.allclose(h, h[0], rtol=1e-6), 'publications are not evenly spaced'
@@ -132,7 +132,7 @@ def _momentum_and_energy(rows, J):
 def test_free_rotation_conserves_angular_momentum_only_with_the_exact_coupling(
         ros_processes, ros_node, request, coupling):
     ns = namespace(request)
-    J = 0.01                     # MODEL.md's measurement: J = 0.01, w = 2, u = 1 mm, Q = 0
+    J = 0.01                     # docs/model.md's measurement: J = 0.01, w = 2, u = 1 mm, Q = 0
     start_simulator(ros_processes, ns, real_time_factor=FAST, drive='torque',
                     coupling=coupling, hub_inertia=J, deflection_limit=0.01,
                     **{'initial.omega': 2.0, 'initial.u': 1e-3})
@@ -144,7 +144,7 @@ def test_free_rotation_conserves_angular_momentum_only_with_the_exact_coupling(
     if coupling == 'exact':
         assert drift < 1e-5      # limited by the finite differences of 100 Hz samples
     else:
-        assert drift > 5e-3      # Eq. 23 loses angular momentum (MODEL.md: 2.2 % max)
+        assert drift > 5e-3      # Eq. 23 loses angular momentum (docs/model.md: 2.2 % max)
 
 
 def test_constant_torque_spins_the_hub_up_with_power_q_omega(ros_processes, ros_node, request):

@@ -52,7 +52,7 @@ def test_eq28_equals_eigenvalues(w):
 
 @pytest.mark.parametrize('w', [0.5, 2.0, 6.0])
 def test_eq28_equals_the_spectrum_of_a_simulated_response(w):
-    """FFT of z = u + i v: forward whirl at +f1, backward at -f2 (MODEL.md)."""
+    """FFT of z = u + i v: forward whirl at +f1, backward at -f2 (docs/model.md)."""
     dt, t_end = 5e-3, 200.0
     run = simulate(RodParams(), ConstantProfile(w), t_end, dt=dt)
     z = run.u + 1j * run.v

@@ -1,6 +1,6 @@
 """plan_spin_up: checked against an independent integration and against simulate.
 
-The reference here is written from MODEL.md, apart from rotrod_core's code: the
+The reference here is written from docs/model.md, apart from rotrod_core's code: the
 general deflection equations (k1, k2, rotating damping) integrated by DOP853 at
 rtol 1e-12, and the free whirl left at the end found from the eigenvectors of the
 constant-speed matrix (each complex pair moves the tip on an ellipse whose
@@ -38,7 +38,7 @@ def coefficients(p):
 
 
 def free_matrix(p, w):
-    """4x4 matrix of (u, v, u', v') at constant w and the forcing (MODEL.md)."""
+    """4x4 matrix of (u, v, u', v') at constant w and the forcing (docs/model.md)."""
     a1, a2, g1, g2, r0 = coefficients(p)
     A = np.array([[0, 0, 1, 0], [0, 0, 0, 1],
                   [w * w - a1, 0, -g1, 2 * w], [0, w * w - a2, -2 * w, -g2]], float)
@@ -236,7 +236,7 @@ def test_refuses_a_batch_of_parameters():
 
 def test_the_whirl_of_a_measured_motion_is_the_fitted_free_whirl():
     """After an Eq. 26 spin-up (Table 1), the motion at 2 rad/s is the static deflection
-    of MODEL.md plus Eq. 28's two circular whirls: the amplitude fitted from the
+    of docs/model.md plus Eq. 28's two circular whirls: the amplitude fitted from the
     samples is |A| + |B| of that closed form, and the state's whirl_residual."""
     from reference import R0, W0, K, M
 

@@ -106,7 +106,7 @@ def test_the_plan_is_for_the_rod_given():
     config/real_rig.yaml holds 2 rad/s beyond 3 mm, which no plan can avoid."""
     stiff = RodParams(youngs_modulus=1.21e11)
     plan = profile_from_options('planned', {'max_angular_acceleration': 0.0}, stiff)
-    us = M * 4.0 * R0 / (1.21 * K - M * 4.0)       # MODEL.md, static deflection
+    us = M * 4.0 * R0 / (1.21 * K - M * 4.0)       # docs/model.md, static deflection
     assert plan.peak_deflection >= us
     assert plan.duration != pytest.approx(profile_from_options(
         'planned', {'max_angular_acceleration': 0.0}).duration, rel=1e-3)

@@ -1,6 +1,6 @@
 """Whirl-frequency estimation against Eq. 28, the Cramer-Rao bound and the Eq. 26 run.
 
-Reference values come from test/reference.py (MODEL.md's closed forms, written apart
+Reference values come from test/reference.py (docs/model.md's closed forms, written apart
 from rotrod_core): Eq. 28 gives f1 = (w0 - w) / 2pi for the forward whirl, at positive
 frequency of z = u + i v, and f2 = (w0 + w) / 2pi for the backward whirl, at negative
 frequency.
@@ -75,7 +75,7 @@ def complex_noise(rng, sigma2, n=N):
 
 @pytest.mark.parametrize('fraction', [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
 def test_step_start_at_constant_w_gives_eq28(fraction):
-    """From rest at constant w (MODEL.md step start): both whirls and the static offset."""
+    """From rest at constant w (docs/model.md step start): both whirls and the static offset."""
     w = fraction * W0
     run = simulate(P, ConstantProfile(w), (N - 1) * DT, dt=DT)
     assert len(run.t) == N

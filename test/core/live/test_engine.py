@@ -59,7 +59,7 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection():
     eng.command_omega(2.0)
     rec = run(eng, 30.0)
     assert eng.state.omega == 2.0
-    u_static = M * 4.0 * R0 / (K - M * 4.0)     # MODEL.md, u_s = m w^2 r0 / (k - m w^2)
+    u_static = M * 4.0 * R0 / (K - M * 4.0)     # docs/model.md, u_s = m w^2 r0 / (k - m w^2)
     assert u_static == pytest.approx(2.792e-3, abs=5e-7)
     settled = rec[rec[:, 0] > 6.0]              # the ramp at 0.5 rad/s^2 ends at 4 s
     assert hann_mean(settled[:, 1]) == pytest.approx(u_static, rel=1e-3)
@@ -150,7 +150,7 @@ def test_the_critical_deflection_is_an_alarm_and_the_simulation_goes_on():
             assert h.level == ERROR and 'beyond the critical deflection 3 mm' in h.message
             assert 'still running' in h.message
     assert eng.halted is None and eng.state.omega == 3.0
-    us = M * 9.0 * R0 / (K - M * 9.0)            # MODEL.md, u_s at 3 rad/s
+    us = M * 9.0 * R0 / (K - M * 9.0)            # docs/model.md, u_s at 3 rad/s
     assert us == pytest.approx(6.506e-3, rel=1e-3)
     h = eng.health()
     values = dict(h.values)
@@ -217,7 +217,7 @@ def test_a_non_finite_step_halts_and_keeps_the_state(monkeypatch):
 def test_health_warns_near_the_limit_and_near_critical_speeds():
     eng = SimulationEngine()
     assert eng.health().level == OK
-    w_cr = W0 * math.sqrt(3e-3 / (3e-3 + R0))   # MODEL.md, quasi-static w_cr
+    w_cr = W0 * math.sqrt(3e-3 / (3e-3 + R0))   # docs/model.md, quasi-static w_cr
     h = SimulationEngine(EngineConfig(initial={'omega': 1.03 * w_cr})).health()
     assert h.level == WARN and 'critical speed' in h.message
     assert dict(h.values)['critical_speed_deflection_limit_rad_s'] == pytest.approx(w_cr)

@@ -1,7 +1,7 @@
 """``rotrod reproduce`` and ``rotrod analyze``: files, image sizes, report numbers, errors.
 
 Each command runs once per module (in a temporary directory, through the CLI's main).
-The report's numbers are compared with closed forms written here from MODEL.md
+The report's numbers are compared with closed forms written here from docs/model.md
 (``reference.py``), not with the code that printed them.
 """
 
@@ -155,7 +155,7 @@ def test_report_embeds_every_figure(reproduced):
 
 
 def test_planned_spin_ups_beside_eq26(reproduced):
-    """Eq. 26's row against MODEL.md's closed forms; each plan within the paper's 3 mm,
+    """Eq. 26's row against docs/model.md's closed forms; each plan within the paper's 3 mm,
     faster than Eq. 26, arriving at the static deflection plus at most its residual, and
     the acceleration bounds the rows name."""
     t = table_with((reproduced[0] / 'report.md').read_text(),
@@ -180,7 +180,7 @@ def test_planned_spin_ups_beside_eq26(reproduced):
     assert robust[1] <= 0.45 + 1e-3 and robust[4] < 0.25 < eq26[4]     # the whole band
 
 
-# --- report numbers vs MODEL.md ---------------------------------------------------------
+# --- report numbers vs docs/model.md ---------------------------------------------------------
 
 def test_frequency_table_agrees_with_eq28_and_the_static_deflection(reproduced):
     t = table_with((reproduced[0] / 'report.md').read_text(), 'omega [rad/s]')
@@ -362,7 +362,7 @@ def test_exact_coupling_conserves_while_eq23_drifts(analyzed):
     assert np.max(np.abs(col['exact energy drift [-]'])) < 1e-9
     paper_l = np.abs(col['paper angular momentum drift [-]'])
     paper_e = np.abs(col['paper energy drift [-]'])
-    assert np.max(paper_l) == pytest.approx(0.022, abs=0.001)     # MODEL.md
+    assert np.max(paper_l) == pytest.approx(0.022, abs=0.001)     # docs/model.md
     assert np.max(paper_e) == pytest.approx(0.043, abs=0.002)
     t = table_with((analyzed[0] / 'analysis.md').read_text(), 'coupling')
     assert float(column(t, 'max |L - L0| / L0')[1]) == pytest.approx(np.max(paper_l), rel=1e-3)
