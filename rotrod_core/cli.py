@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -270,6 +271,15 @@ def cmd_urdf(args) -> int:
     return 0
 
 
+def cmd_fleet(args) -> int:
+    """A fleet of rods through the ROS nodes: ``python -m rotrod_ros.fleet``'s arguments."""
+    # like the demo, the fleet's orchestration lives with the nodes; this process becomes
+    # it (exec), so that a signal to `rotrod fleet` reaches the fleet and stops every node
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execv(sys.executable, [sys.executable, '-m', 'rotrod_ros.fleet', *args.fleet_args])
+
+
 def cmd_demo(args) -> int:
     """The paper's Eq. 26 scenario through the ROS nodes (or offline), per-stage summary."""
     if not args.offline:
@@ -498,6 +508,13 @@ def build_parser() -> argparse.ArgumentParser:
                         'of config/planned.yaml (docs/planner.md)')
     p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser('fleet', add_help=False, prefix_chars='\0',
+                       help='N simulators in the namespaces rod0.. in real time, from one '
+                            'command (python -m rotrod_ros.fleet; --help for its options)')
+    p.add_argument('fleet_args', nargs=argparse.REMAINDER,
+                   help="python -m rotrod_ros.fleet's arguments")
+    p.set_defaults(func=cmd_fleet)
 
     p = sub.add_parser('reproduce', help="the paper's Figs. 3-10 (PNG), a report of its facts "
                                          'beside measured values, the Eq. 26 Rerun recording')

@@ -8,7 +8,7 @@ quasi-static closed form of its own speed.
 import ast
 import os
 import signal
-import sys
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +16,7 @@ import pytest
 from geometry_msgs.msg import Vector3Stamped
 from node_probes import by_time
 from reference import R0, K, M
+from ros_harness import console_script
 from sensor_msgs.msg import JointState
 
 from rotrod_ros import fleet
@@ -31,7 +32,8 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
              for ns in fleet.namespaces(RODS)}
     deflection = {ns: ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
                   for ns in fleet.namespaces(RODS)}
-    proc = ros_processes.start([sys.executable, '-m', 'rotrod_ros.fleet', '--rods', str(RODS),
+    # the user's one command: `rotrod fleet` (python -m rotrod_ros.fleet underneath)
+    proc = ros_processes.start([*console_script('rotrod'), 'fleet', '--rods', str(RODS),
                                 '--profile', '--duration', '120', '--log-dir', str(tmp_path)],
                                name='fleet')
     proc.wait_for_output(f'fleet: {RODS} rods running', timeout=60)
@@ -60,6 +62,12 @@ def test_bad_fleet_sizes_are_refused_with_the_reason():
     with pytest.raises(SystemExit) as exc:
         fleet.main(['--rods', '0'])
     assert exc.value.code == 2
+    out = subprocess.run([*console_script('rotrod'), 'fleet', '--rods', '0'],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and 'rods must be an integer 1..100, got 0' in out.stderr
+    out = subprocess.run([*console_script('rotrod'), 'fleet', '--help'],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and '--rods' in out.stdout and '--profile' in out.stdout
 
 
 def test_fleet_commands_name_every_rod_its_namespace_files_and_frames():
