@@ -12,7 +12,9 @@ nothing changes.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import Any
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
 from rotrod_core.live.loop import LoopSettings
@@ -177,7 +179,7 @@ ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
 SPECS_BY_NAME = {s.name: s for s in ALL_SPECS}
 
 
-def rod_params(values: dict) -> RodParams:
+def rod_params(values: Mapping[str, Any]) -> RodParams:
     """The RodParams of the ROD_SPECS values (unused section sizes are 0); ValueError."""
     rod = {s.name: values[s.name] for s in ROD_SPECS}
     for name in _OPTIONAL_ROD_FIELDS:
@@ -186,7 +188,7 @@ def rod_params(values: dict) -> RodParams:
     return RodParams(**rod)
 
 
-def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
+def build_settings(values: Mapping[str, Any]) -> tuple[EngineConfig, NodeSettings]:
     """Validate a complete set of parameter values; return the engine config and node settings.
 
     Raises ValueError with the reason for the first problem found.
@@ -195,8 +197,8 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
         if name in SPECS_BY_NAME:
             check_value(SPECS_BY_NAME[name], value)
     params = rod_params(values)
-    initial = {name: values[f'initial.{name}'] for name in STATE_FIELDS
-               if values[f'initial.{name}'] != 0.0}
+    initial = tuple((name, values[f'initial.{name}']) for name in STATE_FIELDS
+                    if values[f'initial.{name}'] != 0.0)
     engine = EngineConfig(params=params, initial=initial,
                           **{s.name: values[s.name] for s in ENGINE_SPECS
                              if not s.name.startswith('initial.')})
@@ -215,6 +217,6 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     return engine, node
 
 
-def defaults() -> dict:
+def defaults() -> dict[str, Any]:
     """Every parameter's default value by name."""
     return {s.name: s.default for s in ALL_SPECS}
