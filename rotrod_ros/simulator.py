@@ -263,12 +263,10 @@ class SimulatorNode(Node):
 
 
 def _parser() -> argparse.ArgumentParser:
-    return argparse.ArgumentParser(
-        prog='simulator', description=__doc__.split('\n')[0],
-        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
-                          'Parameters (--ros-args -p name:=value, or --params-file '
-                          'config/table1.yaml):', *parameter_specs.help_lines(ALL_SPECS)]),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    return node_main.parser('simulator', __doc__, [
+        *interfaces.help_lines(INTERFACES),
+        'Parameters (--ros-args -p name:=value, or --params-file config/table1.yaml):',
+        *parameter_specs.help_lines(ALL_SPECS)])
 
 
 def _started(node: SimulatorNode) -> None:
