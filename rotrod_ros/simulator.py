@@ -234,7 +234,7 @@ class SimulatorNode(Node):
         st, stamp, obs = s.state, messages.stamp(s.stamp), self._observation
         wait = not settings.real_time_factor       # as fast as possible: lossless
         send = self._keep_all.send
-        u, v = obs.deflection(st.u, st.v, settings.deflection_noise)
+        u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
         send('joint_states', messages.joint_state(stamp, st, s.torque), wait)
         send('tip/deflection', messages.deflection(stamp, u, v, self._rotor_frame), wait)
         send('tip/position', messages.position(stamp, s.position, self._world_frame), wait)
@@ -248,11 +248,12 @@ class SimulatorNode(Node):
                 send('frequencies/estimate', messages.frequencies(estimate.f1, estimate.f2),
                      wait)
         if s.markers:
-            rod = rod_centerline(config.params, st.u, st.v, st.theta,
+            theta = float(st.theta)
+            rod = rod_centerline(config.params, float(st.u), float(st.v), theta,
                                  scale=settings.marker_deflection_scale).tolist()
             io['markers'].publish(messages.markers(
                 stamp, self._world_frame, MARKER_NAMESPACE, disk_radius=settings.disk_radius,
-                theta=st.theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
+                theta=theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
                 mass_radius=sphere_radius(float(config.params.mass)),
                 trail=obs.trail(rod[-1])))
 
