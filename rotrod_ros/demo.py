@@ -26,7 +26,9 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import IO, Any
 
 import numpy as np
 import yaml
@@ -36,7 +38,7 @@ from rotrod_core.analysis.alignment import profile_delay
 from rotrod_core.analysis.modes import static_deflection
 from rotrod_core.analysis.stages import format_stage_table, series_stage_extremes
 from rotrod_core.command.planner import fitted_whirl_residual
-from rotrod_core.command.profiles import Eq26Profile
+from rotrod_core.command.profiles import Eq26Profile, SpinUpProfile
 from rotrod_core.command.registry import describe, profile_from_options
 from rotrod_core.reporting import recording
 
@@ -59,7 +61,7 @@ class DemoError(RuntimeError):
     """The run did not complete (the reason and the nodes' logs are in the message)."""
 
 
-def ros_environment(env: dict) -> dict:
+def ros_environment(env: Mapping[str, str]) -> dict[str, str]:
     """The environment for the nodes: DDS on localhost and a domain id, unless set."""
     env = dict(env)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
@@ -67,12 +69,12 @@ def ros_environment(env: dict) -> dict:
     return env
 
 
-def param_files(profile: str = 'eq26') -> tuple:
+def param_files(profile: str = 'eq26') -> tuple[str, ...]:
     """The parameter files of every node for ``profile``, in order."""
     return PARAM_FILES + ((PLANNED_FILE,) if profile == 'planned' else ())
 
 
-def planned_profile(files: tuple):
+def planned_profile(files: Iterable[str]) -> tuple[SpinUpProfile, dict[str, Any]]:
     """The plan the profile publisher makes from ``files``: (profile, its options).
 
     The files' "/**" and "/**/rotrod_profile_publisher" parameters over the defaults,
@@ -83,11 +85,13 @@ def planned_profile(files: tuple):
         doc = yaml.safe_load(share_file(f).read_text()) or {}
         for key in ('/**', '/**/rotrod_profile_publisher'):
             values.update((doc.get(key) or {}).get('ros__parameters') or {})
-    return profile_from_options('planned', values, rod_params(values)), values
+    profile = profile_from_options('planned', values, rod_params(values))
+    assert isinstance(profile, SpinUpProfile)       # what a 'planned' profile is
+    return profile, values
 
 
-def node_commands(output: Path, speed: float, real_time: bool, profile: str = 'eq26',
-                  duration: float | None = None) -> dict:
+def node_commands(output: Path, speed: float | None, real_time: bool, profile: str = 'eq26',
+                  duration: float | None = None) -> dict[str, list[str]]:
     """The three commands (name -> argv), with their parameter files and overrides.
 
     ``duration``: how long the profile publisher streams (s; default: the files').
@@ -115,12 +119,12 @@ def node_commands(output: Path, speed: float, real_time: bool, profile: str = 'e
 class Processes:
     """The node processes, each logging to its own file."""
 
-    def __init__(self, log_dir: Path, env: dict):
+    def __init__(self, log_dir: Path, env: Mapping[str, str]):
         self.log_dir, self.env = log_dir, env
-        self.procs: dict = {}
+        self.procs: dict[str, tuple[subprocess.Popen, IO[str]]] = {}
         log_dir.mkdir(parents=True, exist_ok=True)
 
-    def start(self, name: str, cmd: list) -> subprocess.Popen:
+    def start(self, name: str, cmd: list[str]) -> subprocess.Popen:
         """Start ``cmd`` as ``name`` in its own session, output to ``<name>.log``."""
         log = open(self.log_dir / f'{name}.log', 'w')  # closed in stop()
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env,
@@ -165,7 +169,7 @@ class Processes:
 
 def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
         real_time: bool = False, timeout: float | None = None, quiet: bool = False,
-        profile: str = 'eq26') -> dict:
+        profile: str = 'eq26') -> dict[str, Any]:
     """Run the scenario; return the summary (also printed unless ``quiet``).
 
     ``profile``: ``eq26`` (the paper's) or ``planned`` (config/planned.yaml's).
@@ -178,13 +182,14 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     say = (lambda *a: None) if quiet else print
     env = ros_environment(os.environ)
     factor = 1.0 if real_time else float(speed or 2.0)
+    planned: SpinUpProfile | None = None
+    eq26 = Eq26Profile(period=15.0, omega_target=2.0)
     if profile == 'planned':
-        streamed, values = planned_profile(param_files(profile))
-        t_run = streamed.end_time + HOLD
+        planned, values = planned_profile(param_files(profile))
+        t_run = planned.end_time + HOLD
         what = f'the planned spin-up of {PLANNED_FILE} (Table 1)'
         cmds = node_commands(output, speed, real_time, profile, duration=t_run)
     else:
-        streamed = Eq26Profile(period=15.0, omega_target=2.0)
         t_run = 40.0
         what = 'Eq. 26 (Table 1)'
         cmds = node_commands(output, speed, real_time)
@@ -194,8 +199,8 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
         f'rerun_logger; {t_run:g} s of simulated time at {factor:g}x real time '
         f'(ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}, discovery '
         f'{env["ROS_AUTOMATIC_DISCOVERY_RANGE"]})')
-    if profile == 'planned':
-        say(describe(streamed, values)[0])
+    if planned is not None:
+        say(describe(planned, values)[0])
     t0 = time.monotonic()
     try:
         procs.start('simulator', cmds['simulator'])
@@ -223,25 +228,25 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     finally:
         procs.stop_all()
     wall = time.monotonic() - t0
-    if profile == 'planned':
-        summary = summarize_planned(output, streamed, rod_params(values), t_run)
+    if planned is not None:
+        summary = summarize_planned(output, planned, rod_params(values), t_run)
     else:
-        summary = summarize(output, streamed, t_run)
+        summary = summarize(output, eq26, t_run)
     summary['wall_s'] = wall
     say(summary['table'])
     say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
         f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
         f'mm ({summary["dv_rel"]:.2%} of max |v|); ' + (
             f'the profile starts {summary["lead_s"]:.3f} s into the recording'
-            if profile == 'eq26' else
-            f'the hub starts moving {summary["lead_s"] + streamed.t_start:.3f} s into the '
+            if planned is None else
+            f'the hub starts moving {summary["lead_s"] + planned.t_start:.3f} s into the '
             'recording'))
     say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
         f'with: rerun {output}')
     return summary
 
 
-def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
+def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict[str, Any]:
     """Stage extremes of the recorded run beside the offline run of the same profile."""
     t, w = recording.read_series(path, recording.OMEGA)
     tu, u = recording.read_series(path, recording.U)
@@ -261,7 +266,8 @@ def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict:
             'stages': recorded, 'reference': reference}
 
 
-def summarize_planned(path: Path, profile, params: RodParams, t_run: float) -> dict:
+def summarize_planned(path: Path, profile: SpinUpProfile, params: RodParams,
+                      t_run: float) -> dict[str, Any]:
     """A planned spin-up's recording beside the offline run of the plan.
 
     The arrival (the recorded w first at the target), the peak deflection, and the
@@ -270,6 +276,9 @@ def summarize_planned(path: Path, profile, params: RodParams, t_run: float) -> d
     beside the plan's prediction, the offline run's (``whirl_residual`` at the
     arrival) and Eq. 26's.
     """
+    predicted = profile.residual_amplitude
+    if predicted is None:
+        raise ValueError('the profile is not a plan: it predicts no residual whirl')
     t, w = recording.read_series(path, recording.OMEGA)
     tu, u = recording.read_series(path, recording.U)
     _, v = recording.read_series(path, recording.V)
@@ -300,7 +309,7 @@ def summarize_planned(path: Path, profile, params: RodParams, t_run: float) -> d
     ]
     lines = [f'{"":<34}{"recorded":>12}{"offline":>12}']
     lines += [f'{a:<34}{b:>12}{c:>12}' for a, b, c in rows]
-    lines.append(f'(the plan predicts {1e6 * profile.residual_amplitude:.3f} um; Eq. 26 leaves '
+    lines.append(f'(the plan predicts {1e6 * predicted:.3f} um; Eq. 26 leaves '
                  f'{1e6 * eq26_whirl:.3f} um offline; recorded: the free whirl about the '
                  f'static deflection fitted from {SETTLE:g} s after the plan to the end, '
                  f'misfit {1e6 * misfit:.3f} um rms)')
@@ -310,10 +319,10 @@ def summarize_planned(path: Path, profile, params: RodParams, t_run: float) -> d
             'dv_rel': dv / float(np.max(np.abs(offline.v))), 'samples': int(len(t)),
             'arrival_s': arrived, 'peak_m': peak, 'whirl_m': whirl,
             'offline_whirl_m': offline_whirl, 'eq26_whirl_m': eq26_whirl,
-            'predicted_m': profile.residual_amplitude, 'duration_s': profile.duration}
+            'predicted_m': predicted, 'duration_s': profile.duration}
 
 
-def main(argv: list | None = None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """``python -m rotrod_ros.demo``, which ``rotrod demo`` runs (exit 1 on a failure)."""
     parser = argparse.ArgumentParser(
         prog='rotrod demo', description="the paper's spin-up scenario through the ROS "

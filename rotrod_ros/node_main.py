@@ -16,6 +16,14 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 
+def parser(prog: str, doc: str, lines: list[str]) -> argparse.ArgumentParser:
+    """A node's ``--help``: its docstring's first line, then the rest of it and ``lines``."""
+    return argparse.ArgumentParser(
+        prog=prog, description=doc.split('\n')[0],
+        epilog='\n'.join([doc.split('\n', 2)[2], *lines]),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
 def make_executor(name: str, logger, context=None):
     """The rclpy executor named ``name``: 'single_threaded' or 'events' (a warning)."""
     if name == 'events':

@@ -11,11 +11,13 @@ turtlesim does, and checks the values given; ``--help`` (:func:`help_lines`) and
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
+from rclpy.node import Node
 
 from .node_main import ConfigurationError
 
@@ -36,17 +38,24 @@ class Spec:
     """SI unit ('1' for a ratio; '' for a bool, a string or a choice)."""
     low: float | None = None
     high: float | None = None
-    choices: tuple = ()
+    choices: tuple[str, ...] = ()
     read_only: bool = False
     """True: set at start only (a running node refuses a change)."""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if (self.low is None) != (self.high is None):
             raise ValueError(f'{self.name}: a range needs both ends')
-        if self.low is not None and not self.low <= self.default <= self.high:
+        if self.bounds is not None and not self.bounds[0] <= self.default <= self.bounds[1]:
             raise ValueError(f'{self.name}: default {self.default!r} outside its range')
         if self.choices and self.default not in self.choices:
             raise ValueError(f'{self.name}: default {self.default!r} not among its choices')
+
+    @property
+    def bounds(self) -> tuple[float, float] | None:
+        """(low, high), inclusive; None: no range."""
+        if self.low is None or self.high is None:
+            return None
+        return self.low, self.high
 
     @property
     def description(self) -> str:
@@ -74,14 +83,15 @@ def descriptor(spec: Spec, read_only: bool | None = None) -> ParameterDescriptor
     """
     d = ParameterDescriptor(name=spec.name, description=spec.description,
                             read_only=spec.read_only if read_only is None else read_only)
+    bounds = spec.bounds
     if spec.choices:
         d.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    elif spec.low is not None and spec.integer:
-        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+    elif bounds is not None and spec.integer:
+        d.integer_range = [IntegerRange(from_value=int(bounds[0]), to_value=int(bounds[1]),
                                         step=0)]
-    elif spec.low is not None:
-        d.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
-                                                     to_value=float(spec.high), step=0.0)]
+    elif bounds is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(bounds[0]),
+                                                     to_value=float(bounds[1]), step=0.0)]
     return d
 
 
@@ -100,18 +110,20 @@ def check_value(spec: Spec, value: Any) -> None:
         raise ValueError(f'{spec.name} must be a number, got {value!r}')
     if not math.isfinite(value):
         raise ValueError(f'{spec.name} must be finite, got {value!r}')
-    if spec.low is not None and not spec.low <= value <= spec.high:
-        raise ValueError(f'{spec.name} must be in [{spec.low:g}, {spec.high:g}], got {value!r}')
+    bounds = spec.bounds
+    if bounds is not None and not bounds[0] <= value <= bounds[1]:
+        raise ValueError(f'{spec.name} must be in [{bounds[0]:g}, {bounds[1]:g}], got {value!r}')
 
 
-def declare(node, specs, read_only: bool | None = None) -> dict:
+def declare(node: Node, specs: Iterable[Spec],
+            read_only: bool | None = None) -> dict[str, Any]:
     """Declare ``specs`` on ``node`` (rclpy) with their descriptors; the values by name.
 
     A value given at start (``-p``, ``--params-file``) of the wrong type, out of
     range or not among the choices raises :class:`ConfigurationError` naming the
     parameter (the node exits with status 2).
     """
-    values = {}
+    values: dict[str, Any] = {}
     for spec in specs:
         try:
             value = node.declare_parameter(spec.name, spec.default,
@@ -136,12 +148,12 @@ def range_text(spec: Spec) -> str:
     """'[low, high]', 'a | b' for choices, or ''."""
     if spec.choices:
         return ' | '.join(spec.choices)
-    if spec.low is None:
+    if spec.bounds is None:
         return ''
-    return f'[{format_value(spec.low)}, {format_value(spec.high)}]'
+    return f'[{format_value(spec.bounds[0])}, {format_value(spec.bounds[1])}]'
 
 
-def help_lines(specs, read_only: bool | None = None) -> list:
+def help_lines(specs: Iterable[Spec], read_only: bool | None = None) -> list[str]:
     """One line per spec for ``--help``: name, text, then unit, range, default."""
     out = []
     for s in specs:

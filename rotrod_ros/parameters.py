@@ -7,12 +7,15 @@ from :data:`rotrod_core.model.params.FIELDS`, where the rod's units, description
 ranges are defined once. Values are validated as a whole (:func:`build_settings`):
 the physics through :class:`rotrod_core.live.engine.EngineConfig`, the node's own
 rates here, so a combination that makes no sense is refused with a reason and
-nothing changes.
+nothing changes. :class:`ParameterValues` keeps the values in use and checks a change
+before it is taken (the node's on-set callback checks, its post-set callback applies).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import Any
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
 from rotrod_core.live.loop import LoopSettings
@@ -22,8 +25,8 @@ from rotrod_core.model.params import FIELDS, FieldInfo, RodParams
 
 from .parameter_specs import Spec, check_value, descriptor
 
-__all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'ROD_SPECS',
-           'SPECS_BY_NAME', 'Spec', 'build_settings', 'check_value', 'defaults',
+__all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'ParameterValues',
+           'ROD_SPECS', 'SPECS_BY_NAME', 'Spec', 'build_settings', 'check_value', 'defaults',
            'descriptor', 'rod_params']
 
 EXECUTORS = ('single_threaded', 'events')
@@ -177,7 +180,7 @@ ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
 SPECS_BY_NAME = {s.name: s for s in ALL_SPECS}
 
 
-def rod_params(values: dict) -> RodParams:
+def rod_params(values: Mapping[str, Any]) -> RodParams:
     """The RodParams of the ROD_SPECS values (unused section sizes are 0); ValueError."""
     rod = {s.name: values[s.name] for s in ROD_SPECS}
     for name in _OPTIONAL_ROD_FIELDS:
@@ -186,7 +189,7 @@ def rod_params(values: dict) -> RodParams:
     return RodParams(**rod)
 
 
-def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
+def build_settings(values: Mapping[str, Any]) -> tuple[EngineConfig, NodeSettings]:
     """Validate a complete set of parameter values; return the engine config and node settings.
 
     Raises ValueError with the reason for the first problem found.
@@ -195,8 +198,8 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
         if name in SPECS_BY_NAME:
             check_value(SPECS_BY_NAME[name], value)
     params = rod_params(values)
-    initial = {name: values[f'initial.{name}'] for name in STATE_FIELDS
-               if values[f'initial.{name}'] != 0.0}
+    initial = tuple((name, values[f'initial.{name}']) for name in STATE_FIELDS
+                    if values[f'initial.{name}'] != 0.0)
     engine = EngineConfig(params=params, initial=initial,
                           **{s.name: values[s.name] for s in ENGINE_SPECS
                              if not s.name.startswith('initial.')})
@@ -215,6 +218,45 @@ def build_settings(values: dict) -> tuple[EngineConfig, NodeSettings]:
     return engine, node
 
 
-def defaults() -> dict:
+def defaults() -> dict[str, Any]:
     """Every parameter's default value by name."""
     return {s.name: s.default for s in ALL_SPECS}
+
+
+class ParameterValues:
+    """The simulator's parameter values in use, and a change checked before it is taken.
+
+    :meth:`check` (the on-set callback's) builds the settings of the values with a
+    change and remembers them, changing nothing in use; :meth:`take` (the post-set
+    callback's) makes the values with the change the ones in use and returns their
+    settings, those :meth:`check` built when it was given the same values. Names not
+    among :data:`SPECS_BY_NAME` (rclpy's own, e.g. ``use_sim_time``) are left out.
+    Raises ValueError (the reason) on values that make no sense together.
+    """
+
+    def __init__(self, values: Mapping[str, Any]) -> None:
+        self.values = dict(values)
+        """The values in use, by name."""
+        self._checked = (self.values, *build_settings(self.values))
+
+    @property
+    def checked(self) -> tuple[EngineConfig, NodeSettings]:
+        """The engine config and node settings last built (at first: of the values in use)."""
+        return self._checked[1], self._checked[2]
+
+    def _with(self, changes: Mapping[str, Any]) -> dict[str, Any]:
+        return {**self.values, **{name: value for name, value in changes.items()
+                                  if name in SPECS_BY_NAME}}
+
+    def check(self, changes: Mapping[str, Any]) -> None:
+        """Check the values in use with ``changes`` as a whole (ValueError); none is taken."""
+        values = self._with(changes)
+        self._checked = (values, *build_settings(values))
+
+    def take(self, changes: Mapping[str, Any]) -> tuple[EngineConfig, NodeSettings]:
+        """Put the values with ``changes`` in use; their engine config and node settings."""
+        values = self._with(changes)
+        if self._checked[0] != values:            # not what was checked last
+            self._checked = (values, *build_settings(values))
+        self.values = values
+        return self.checked

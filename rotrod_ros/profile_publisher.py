@@ -176,12 +176,9 @@ class ProfilePublisher(Node):
 
 
 def _parser() -> argparse.ArgumentParser:
-    return argparse.ArgumentParser(
-        prog='profile_publisher', description=__doc__.split('\n')[0],
-        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
-                          'Parameters:',
-                          *parameter_specs.help_lines(PARAMETERS, READ_ONLY)]),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    return node_main.parser('profile_publisher', __doc__, [
+        *interfaces.help_lines(INTERFACES), 'Parameters:',
+        *parameter_specs.help_lines(PARAMETERS, READ_ONLY)])
 
 
 def main(args: list | None = None) -> int:

@@ -234,12 +234,9 @@ class RerunLogger(Node):
 
 
 def _parser() -> argparse.ArgumentParser:
-    return argparse.ArgumentParser(
-        prog='rerun_logger', description=__doc__.split('\n')[0],
-        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
-                          'Parameters:',
-                          *parameter_specs.help_lines(PARAMETERS, READ_ONLY)]),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    return node_main.parser('rerun_logger', __doc__, [
+        *interfaces.help_lines(INTERFACES), 'Parameters:',
+        *parameter_specs.help_lines(PARAMETERS, READ_ONLY)])
 
 
 def main(args: list | None = None) -> int:

@@ -135,12 +135,9 @@ class RigMonitorNode(Node):
 
 
 def _parser() -> argparse.ArgumentParser:
-    return argparse.ArgumentParser(
-        prog='rig_monitor', description=__doc__.split('\n')[0],
-        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
-                          'Parameters:',
-                          *parameter_specs.help_lines(ALL_SPECS, READ_ONLY)]),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    return node_main.parser('rig_monitor', __doc__, [
+        *interfaces.help_lines(INTERFACES), 'Parameters:',
+        *parameter_specs.help_lines(ALL_SPECS, READ_ONLY)])
 
 
 def main(args: list | None = None) -> int:

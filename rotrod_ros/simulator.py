@@ -15,14 +15,11 @@ from __future__ import annotations
 import argparse
 import gc
 import sys
-import time
-from collections import deque
+from typing import Any
 
-import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-from rclpy._rclpy_pybind11 import RCLError
-from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray
@@ -31,14 +28,17 @@ from std_srvs.srv import SetBool, Trigger
 import rotrod_core.live.scheduling as scheduling
 from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
 from rotrod_core.estimation.whirl import WhirlEstimator
-from rotrod_core.live.engine import SimulationEngine
+from rotrod_core.live.engine import EngineConfig, SimulationEngine
 from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
+from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
 
 from . import interfaces, messages, node_main, parameter_specs
 from .interfaces import pub, srv, sub
+from .keep_all import KeepAllPublishing
 from .node_main import ConfigurationError
-from .parameters import ALL_SPECS, SPECS_BY_NAME, build_settings
+from .observation import Observation
+from .parameters import ALL_SPECS, NodeSettings, ParameterValues
 
 NODE_NAME = 'rotrod_simulator'
 FLUSH_TIMEOUT = 10.0
@@ -94,26 +94,25 @@ INTERFACES = (
 class SimulatorNode(Node):
     """The simulator: parameters, topics, services; the physics is :attr:`loop`'s."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        self._values = parameter_specs.declare(self, ALL_SPECS)
+        values = parameter_specs.declare(self, ALL_SPECS)
         if self.get_parameter('use_sim_time').value:
             raise ConfigurationError('use_sim_time must be false: the simulator is the clock '
                                      'source (it publishes /clock when real_time_factor != 1)')
         try:
-            engine_config, settings = build_settings(self._values)
+            self._param_values = ParameterValues(values)
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
-        self._validated = (self._values, engine_config, settings)
-        self._estimator = self._make_estimator(settings)
-        self._noise = np.random.default_rng(settings.noise_seed)
-        self._trail: deque = deque(maxlen=max(1, settings.marker_trail_length))
+        engine_config, settings = self._param_values.checked
+        self._observation = Observation(settings)
         prefix = settings.frame_prefix
-        self._rotor_frame, self._world_frame = prefix + 'rotor', prefix + 'world'
+        self._rotor_frame, self._world_frame = prefix + ROTOR_FRAME, prefix + WORLD_FRAME
         self._status_name = f'{self.get_fully_qualified_name()}: simulation'
         self.loop = RealTimeLoop(
             SimulationEngine(engine_config), settings, self._publish,
-            publish_status=self._publish_status, snapshot=lambda: self._estimator,
+            publish_status=self._publish_status,
+            snapshot=lambda: self._observation.estimator,
             logger=self.get_logger(), running=self.context.ok,
             inputs={'omega': 'cmd/omega or joint_command',
                     'torque': 'cmd/torque or joint_command'},
@@ -121,18 +120,15 @@ class SimulatorNode(Node):
         submit = self.loop.submit
         # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
         self.lossless = settings.real_time_factor == 0
-        self.held_up = 0
-        """Publications a KEEP_ALL subscriber held up (rmw blocked them, then failed)."""
-        self.dropped_publications = 0
-        """Publications a KEEP_ALL subscriber held up beyond rmw's blocking time while
-        paced (dropped rather than delay the clock); as fast as possible, none: the
-        physics waits."""
         self._io = interfaces.create(self, INTERFACES, {
             'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
             'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
             'joint_command': self._on_joint_command,
             '~/reset': self._on_reset, '~/pause': self._on_pause},
             conditions={LOSSLESS} if self.lossless else ())
+        # paced, a held-up publication is dropped; as fast as possible, the physics waits
+        self._keep_all = KeepAllPublishing(self._io, self.get_logger(), self.context.ok,
+                                           lambda: self.loop.running)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -142,58 +138,34 @@ class SimulatorNode(Node):
         return self.loop.engine
 
     @property
-    def settings(self):
-        """The node's current settings (:class:`rotrod_ros.parameters.NodeSettings`)."""
+    def settings(self) -> NodeSettings:
+        """The node's current settings."""
         return self.loop.settings
 
     # ----------------------------------------------------------------- parameters
-    def _validate_parameters(self, params) -> SetParametersResult:
+    def _validate_parameters(self, params: list[Parameter]) -> SetParametersResult:
         """On set: check the new values as a whole; change nothing."""
-        values = dict(self._values)
-        for p in params:
-            if p.name == 'use_sim_time' and p.value:
-                return SetParametersResult(
-                    successful=False, reason='the simulator is the clock source; '
-                                             'use_sim_time must stay false')
-            if p.name in SPECS_BY_NAME:
-                values[p.name] = p.value
+        if any(p.name == 'use_sim_time' and p.value for p in params):
+            return SetParametersResult(successful=False, reason='the simulator is the clock '
+                                       'source; use_sim_time must stay false')
         try:
-            self._validated = (values, *build_settings(values))
+            self._param_values.check({p.name: p.value for p in params})
         except ValueError as exc:
             self.get_logger().warning(f'parameter change rejected: {exc}')
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
-    def _apply_parameters(self, params) -> None:
-        """Post set: apply the values the on-set callback validated."""
-        values = {**self._values, **{p.name: p.value for p in params
-                                     if p.name in SPECS_BY_NAME}}
-        if self._validated[0] != values:            # not what was validated last
-            self._validated = (values, *build_settings(values))
-        _, engine_config, settings = self._validated
+    def _apply_parameters(self, params: list[Parameter]) -> None:
+        """Post set: apply the values the on-set callback checked."""
+        engine_config, settings = self._param_values.take({p.name: p.value for p in params})
         with self.loop.lock:
             old = self.loop.settings
             self.loop.reconfigure(engine_config, settings)
-            if (settings.estimate_window, settings.estimate_rate, settings.publish_rate) != (
-                    old.estimate_window, old.estimate_rate, old.publish_rate):
-                self._estimator = self._make_estimator(settings)
-            if settings.noise_seed != old.noise_seed:
-                self._noise = np.random.default_rng(settings.noise_seed)
-            if settings.marker_trail_length != old.marker_trail_length:
-                self._trail = deque(self._trail, maxlen=max(1, settings.marker_trail_length))
-            self._values = values
+            self._observation.reconfigure(old, settings)
         changed = ', '.join(f'{p.name}={p.value!r}' for p in params)
         self.get_logger().info(f'parameters changed: {changed}')
 
-    @staticmethod
-    def _make_estimator(settings) -> WhirlEstimator | None:
-        """Whirl-frequency estimator over the published motion (None: estimates off)."""
-        if not settings.estimate_window:
-            return None
-        return WhirlEstimator(settings.estimate_window, settings.publish_period,
-                              1.0 / settings.estimate_rate)
-
-    def _waited_topics(self) -> list:
+    def _waited_topics(self) -> list[str]:
         return [t for t in SAMPLE_TOPICS
                 if t != 'frequencies/estimate' or self.settings.estimate_window]
 
@@ -219,13 +191,11 @@ class SimulatorNode(Node):
         self.loop.submit(kind, value, 'joint_command')
 
     # ----------------------------------------------------------------- services
-    def _on_reset(self, request, response):
+    def _on_reset(self, request: Trigger.Request,
+                  response: Trigger.Response) -> Trigger.Response:
         with self.loop.lock:
             was_halted, t = self.loop.reset()
-            self._trail.clear()
-            # a fresh estimator, not reset() in place: the physics thread may be
-            # pushing into the current one (its tick's snapshot) outside the lock
-            self._estimator = self._make_estimator(self.settings)
+            self._observation.reset(self.settings)
         response.success = True
         response.message = f'reset to the initial state at simulated time {t:.3f} s'
         if was_halted:
@@ -233,7 +203,8 @@ class SimulatorNode(Node):
         self.get_logger().info(response.message)
         return response
 
-    def _on_pause(self, request, response):
+    def _on_pause(self, request: SetBool.Request,
+                  response: SetBool.Response) -> SetBool.Response:
         response.message = self.loop.pause(request.data)
         response.success = True
         self.get_logger().info(response.message)
@@ -250,57 +221,24 @@ class SimulatorNode(Node):
         reliable subscribers to acknowledge every sample already published.
         """
         self.loop.stop()
-        if self.lossless and self.context.ok():
-            deadline = time.monotonic() + FLUSH_TIMEOUT
-            for name in SAMPLE_TOPICS:
-                left = max(0.0, deadline - time.monotonic())
-                if not self._io[name].wait_for_all_acked(Duration(seconds=left)):
-                    self.get_logger().warning(f'{name}: not every publication acknowledged '
-                                              f'within {FLUSH_TIMEOUT:g} s')
+        if self.lossless:
+            self._keep_all.flush(SAMPLE_TOPICS, FLUSH_TIMEOUT)
+        sent = self._keep_all
         self.get_logger().info(f'stopped at simulated time {self.engine.time:.3f} s after '
-                               f'{self.loop.publications} publications ({self.held_up} held '
-                               f'up by a KEEP_ALL subscriber, {self.dropped_publications} '
-                               'dropped)')
+                               f'{self.loop.publications} publications ({sent.held_up} held '
+                               f'up by a KEEP_ALL subscriber, {sent.dropped} dropped)')
 
     # ----------------------------------------------------------------- publishing
-    def _send(self, name: str, msg, settings) -> None:
-        """Publish ``msg`` on ``name``, waiting for a KEEP_ALL subscriber if need be.
-
-        rmw blocks a KEEP_ALL publication while a KEEP_ALL subscriber's history is full,
-        then fails. As fast as possible the physics waits for it (so nothing is lost);
-        paced, the publication is dropped and counted (the clock does not wait).
-        """
-        publisher = self._io[name]
-        try:
-            publisher.publish(msg)
-            return
-        except RCLError:
-            if not self.context.ok():
-                raise
-        self.held_up += 1
-        while not settings.real_time_factor and self.context.ok() and self.loop.running:
-            self.get_logger().info(f'{name}: a KEEP_ALL subscriber is behind; waiting for it',
-                                   throttle_duration_sec=5.0)
-            try:
-                publisher.publish(msg)
-                return
-            except RCLError:
-                pass
-        self.dropped_publications += 1
-        self.get_logger().warning(f'{name}: a KEEP_ALL subscriber is behind: '
-                                  f'{self.dropped_publications} publications dropped so far',
-                                  throttle_duration_sec=1.0)
-
-    def _publish(self, s: Sample, settings, config, estimator) -> None:
-        st, stamp, send = s.state, messages.stamp(s.stamp), self._send
-        u, v = st.u, st.v
-        if settings.deflection_noise:              # a sensor's noise: the state is untouched
-            du, dv = self._noise.normal(0.0, settings.deflection_noise, 2)
-            u, v = u + float(du), v + float(dv)
-        send('joint_states', messages.joint_state(stamp, st, s.torque), settings)
-        send('tip/deflection', messages.deflection(stamp, u, v, self._rotor_frame), settings)
-        send('tip/position', messages.position(stamp, s.position, self._world_frame), settings)
-        send('frequencies', messages.frequencies(*s.frequencies), settings)
+    def _publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,
+                 estimator: WhirlEstimator | None) -> None:
+        st, stamp, obs = s.state, messages.stamp(s.stamp), self._observation
+        wait = not settings.real_time_factor       # as fast as possible: lossless
+        send = self._keep_all.send
+        u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
+        send('joint_states', messages.joint_state(stamp, st, s.torque), wait)
+        send('tip/deflection', messages.deflection(stamp, u, v, self._rotor_frame), wait)
+        send('tip/position', messages.position(stamp, s.position, self._world_frame), wait)
+        send('frequencies', messages.frequencies(*s.frequencies), wait)
         io = self._io
         if settings.publishes_clock:
             io['/clock'].publish(messages.clock(stamp))
@@ -308,16 +246,16 @@ class SimulatorNode(Node):
             estimate = estimator.push(s.time, u, v)
             if estimate is not None:
                 send('frequencies/estimate', messages.frequencies(estimate.f1, estimate.f2),
-                     settings)
+                     wait)
         if s.markers:
-            rod = rod_centerline(config.params, st.u, st.v, st.theta,
-                                 scale=settings.marker_deflection_scale)
-            self._trail.append(tuple(rod[-1]))
+            theta = float(st.theta)
+            rod = rod_centerline(config.params, float(st.u), float(st.v), theta,
+                                 scale=settings.marker_deflection_scale).tolist()
             io['markers'].publish(messages.markers(
-                stamp, self._world_frame, 'rotrod', disk_radius=settings.disk_radius,
-                theta=st.theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
+                stamp, self._world_frame, MARKER_NAMESPACE, disk_radius=settings.disk_radius,
+                theta=theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
                 mass_radius=sphere_radius(float(config.params.mass)),
-                trail=list(self._trail)))
+                trail=obs.trail(rod[-1])))
 
     def _publish_status(self, status: Status) -> None:
         self._io['/diagnostics'].publish(messages.diagnostics(
@@ -326,12 +264,10 @@ class SimulatorNode(Node):
 
 
 def _parser() -> argparse.ArgumentParser:
-    return argparse.ArgumentParser(
-        prog='simulator', description=__doc__.split('\n')[0],
-        epilog='\n'.join([__doc__.split('\n', 2)[2], *interfaces.help_lines(INTERFACES),
-                          'Parameters (--ros-args -p name:=value, or --params-file '
-                          'config/table1.yaml):', *parameter_specs.help_lines(ALL_SPECS)]),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    return node_main.parser('simulator', __doc__, [
+        *interfaces.help_lines(INTERFACES),
+        'Parameters (--ros-args -p name:=value, or --params-file config/table1.yaml):',
+        *parameter_specs.help_lines(ALL_SPECS)])
 
 
 def _started(node: SimulatorNode) -> None:
@@ -357,7 +293,7 @@ def _started(node: SimulatorNode) -> None:
         f'executor {s.executor}')
 
 
-def main(args: list | None = None) -> int:
+def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run rotrod simulator`` and the ``simulator`` console script."""
     return node_main.run(NODE_NAME, SimulatorNode, _parser(), args,
                          make_executor=lambda node: node_main.make_executor(

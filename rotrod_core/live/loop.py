@@ -28,7 +28,7 @@ import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Generic, NamedTuple, TypeVar
 
 import rotrod_core.live.scheduling as scheduling
 from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
@@ -123,6 +123,10 @@ class LoopSettings:
         return self.real_time_factor != 1.0
 
 
+SettingsT = TypeVar('SettingsT', bound=LoopSettings)
+"""The settings a loop is given: :class:`LoopSettings` or the host's subclass."""
+
+
 class Sample(NamedTuple):
     """What is published at one instant."""
 
@@ -173,7 +177,7 @@ class SystemClock:
         return True
 
 
-class RealTimeLoop:
+class RealTimeLoop(Generic[SettingsT]):
     """The engine stepped in real time, commands applied, publications on time.
 
     Args:
@@ -197,7 +201,7 @@ class RealTimeLoop:
             time starts then (default: at once).
     """
 
-    def __init__(self, engine: SimulationEngine, settings: LoopSettings, publish, *,
+    def __init__(self, engine: SimulationEngine, settings: SettingsT, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
                  running=None, inputs=None, ready=None):
         self.engine = engine
@@ -385,7 +389,7 @@ class RealTimeLoop:
                   f'{eng.timed_out_at:.3f} s: {action}', 'timeout', 1.0)
 
     # ----------------------------------------------------------------- control
-    def reconfigure(self, config, settings: LoopSettings) -> None:
+    def reconfigure(self, config, settings: SettingsT) -> None:
         """Switch to a (validated) engine config and settings, keeping state and clock.
 
         Commands that came before the change are applied first, under the old config.

@@ -1,0 +1,86 @@
+"""Publishing where a KEEP_ALL subscriber that falls behind holds the publisher up.
+
+On a topic with reliable KEEP_ALL history on both sides (:func:`rotrod_ros.interfaces.qos`),
+rmw blocks a publication while a subscriber's history is full (rmw_fastrtps: 100 ms), then
+fails. :meth:`KeepAllPublishing.send` then either waits for the subscriber, publishing
+again for as long as asked (nothing is lost), or drops the publication and counts it;
+:meth:`KeepAllPublishing.flush` waits at the end for the subscribers to acknowledge what
+was published.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.duration import Duration
+from rclpy.impl.rcutils_logger import RcutilsLogger
+from rclpy.publisher import Publisher
+
+
+class KeepAllPublishing:
+    """Publications a KEEP_ALL subscriber may hold up: waited for or dropped, counted.
+
+    Args:
+        publishers: the node's publishers by topic name.
+        logger: the node's logger.
+        ok: whether the node's context is up (an error while it shuts down is raised).
+        running: whether the publisher's source is still running (a wait ends when not).
+    """
+
+    def __init__(self, publishers: Mapping[str, Publisher], logger: RcutilsLogger,
+                 ok: Callable[[], bool], running: Callable[[], bool]) -> None:
+        self._publishers = publishers
+        self._logger = logger
+        self._ok = ok
+        self._running = running
+        self.held_up = 0
+        """Publications a KEEP_ALL subscriber held up (rmw blocked them, then failed)."""
+        self.dropped = 0
+        """Publications a KEEP_ALL subscriber held up beyond rmw's blocking time and
+        not waited for (dropped rather than delay the clock)."""
+
+    def send(self, name: str, msg: Any, wait: bool) -> None:
+        """Publish ``msg`` on ``name``; if a KEEP_ALL subscriber holds it up, wait or drop.
+
+        ``wait``: publish again until it goes through (while the context is up and the
+        source runs); otherwise the publication is dropped and counted.
+        """
+        publisher = self._publishers[name]
+        try:
+            publisher.publish(msg)
+            return
+        except RCLError:
+            if not self._ok():
+                raise
+        self.held_up += 1
+        while wait and self._ok() and self._running():
+            self._logger.info(f'{name}: a KEEP_ALL subscriber is behind; waiting for it',
+                              throttle_duration_sec=5.0)
+            try:
+                publisher.publish(msg)
+                return
+            except RCLError:
+                pass
+        self.dropped += 1
+        self._logger.warning(f'{name}: a KEEP_ALL subscriber is behind: '
+                             f'{self.dropped} publications dropped so far',
+                             throttle_duration_sec=1.0)
+
+    def flush(self, names: Iterable[str], timeout: float) -> None:
+        """Wait for the subscribers of ``names`` to acknowledge every publication.
+
+        Up to ``timeout`` wall seconds in all (rmw sends acknowledgement requests
+        periodically); a warning names each topic not acknowledged in time. Nothing if
+        the context is down.
+        """
+        if not self._ok():
+            return
+        deadline = time.monotonic() + timeout
+        for name in names:
+            left = max(0.0, deadline - time.monotonic())
+            if not self._publishers[name].wait_for_all_acked(Duration(seconds=left)):
+                self._logger.warning(f'{name}: not every publication acknowledged '
+                                     f'within {timeout:g} s')
