@@ -19,6 +19,7 @@ DDS stays on this machine unless the caller set otherwise
 from __future__ import annotations
 
 import argparse
+import ctypes
 import math
 import os
 import random
@@ -26,7 +27,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import IO, Any
 
@@ -116,8 +117,29 @@ def node_commands(output: Path, speed: float | None, real_time: bool, profile: s
     }
 
 
+PR_SET_PDEATHSIG = 1
+"""prctl(2) option: the signal a process gets when the one that started it ends."""
+
+
+def _stop_with(parent: int) -> Callable[[], None]:
+    """A ``preexec_fn``: the child gets SIGTERM when ``parent`` ends, even by SIGKILL.
+
+    So a killed demo or fleet leaves no node running (at real-time priority) behind
+    it. Linux only; elsewhere nothing is asked.
+    """
+    def arm() -> None:
+        try:
+            prctl = ctypes.CDLL(None, use_errno=True).prctl
+        except (OSError, AttributeError):
+            return
+        prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+        if os.getppid() != parent:          # it ended before the request took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+    return arm
+
+
 class Processes:
-    """The node processes, each logging to its own file."""
+    """The node processes, each logging to its own file; they end with this process."""
 
     def __init__(self, log_dir: Path, env: Mapping[str, str]):
         self.log_dir, self.env = log_dir, env
@@ -128,7 +150,7 @@ class Processes:
         """Start ``cmd`` as ``name`` in its own session, output to ``<name>.log``."""
         log = open(self.log_dir / f'{name}.log', 'w')  # closed in stop()
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env,
-                                start_new_session=True)
+                                start_new_session=True, preexec_fn=_stop_with(os.getpid()))
         self.procs[name] = (proc, log)
         return proc
 
