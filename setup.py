@@ -45,7 +45,8 @@ setup(
         # rosbag2 (MCAP) files of offline runs: rotrod simulate --bag (no rclpy needed)
         'bag': ['rosbags'],
         # pytransform3d: the URDF's forward kinematics; mcap, mcap-ros2-support: an
-        # independent reader of the bags (test/test_urdf.py, test/test_bag.py)
+        # independent reader of the bags (test/core/model/test_urdf.py,
+        # test/core/reporting/test_bag.py)
         'dev': ['pytest', 'pytest-timeout', 'hypothesis', 'ruff', 'mypy',
                 'catkin-pkg', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py',
                 'pytransform3d', 'mcap', 'mcap-ros2-support'],

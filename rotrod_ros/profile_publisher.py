@@ -56,10 +56,8 @@ the subscriber has it (reliable delivery), so the stream stays lossless."""
 MATCH_SETTLE = 0.5
 """Wall time from the first matched subscriber to the first sample, s. DDS matches the
 two sides separately: the subscription the sender counts may not count the sender yet,
-and samples sent meanwhile reach it later, all at once. Measured on this machine's
-loopback: such a start burst in 3 of 12 streams started on the match (up to 90 ms, and
-0.4 s in a demo run under load), 1 of 14 with 0.3 s of settling (40 ms). The simulator
-copes with a burst (OmegaSetpointShaper), but a burst is a profile delivered late."""
+and samples sent meanwhile reach it later, all at once (a start burst: a profile
+delivered late). Chosen by measurement: docs/realtime.md#match-settle."""
 
 PARAMETERS = (
     Spec('profile', 'eq26', 'the profile to stream', choices=OPTION_PROFILES),

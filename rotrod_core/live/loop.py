@@ -59,17 +59,14 @@ LEAD = 0.0025
 ahead of the publications it computes; each publication then waits for its due time,
 so its timing does not depend on how long the integration took, nor on a slow
 previous publication (a marker array and a whirl estimate take up to a few ms). A
-command that arrives within this lead applies at most this late. Measured (60 s runs,
-bench_realtime's lag): 2 ms gave a largest lag of 4.4 and 10.2 ms, 2.5 ms of 1.0 and
-5.7 ms."""
+command that arrives within this lead applies at most this late. Chosen by
+measurement: docs/realtime.md#lead."""
 SPIN = 0.0003
 """Wall seconds before a publication's due time at which its thread stops sleeping and
-polls the clock: this machine (a VM) sometimes wakes a sleeping SCHED_FIFO thread
-milliseconds late, a busy one not. Costs about SPIN x publish_rate of a core (3 % at
-100 Hz). With LEAD: largest lag 1.9 and 2.1 ms in 60 s runs, p99 0.3-0.4 ms. Not
-while the thread holds a CPU wake-up latency request of at most
-SLEEP_ONLY_LATENCY: idle CPUs then wake at once, and the poll was measured to be half
-of the node's CPU for no gain (docs/realtime.md)."""
+polls the clock (a sleeping SCHED_FIFO thread may wake late on a VM, a busy one not).
+Costs about SPIN x publish_rate of a core. Not while the thread holds a CPU wake-up
+latency request of at most SLEEP_ONLY_LATENCY: idle CPUs then wake at once. Chosen by
+measurement: docs/realtime.md#spin."""
 SLEEP_ONLY_LATENCY = 0
 """Largest CPU wake-up latency request (us, cpu_dma_latency) under which publications
 only sleep to their due time, without SPIN."""
