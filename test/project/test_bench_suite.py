@@ -166,8 +166,9 @@ def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys)
                                      'bench_planner.py', 'bench_identify.py',
                                      'bench_realtime.py', 'bench_fleet.py']
     assert calls[0][1] == ['--quick'] and calls[1][1] == ['--quick']
-    assert calls[3][1] == ['--duration', '5']
-    assert calls[4][1] == ['--duration', '5', '--rods', '3']
+    assert calls[4][1] == ['--seeds', '10', '--eq26-seeds', '3']
+    assert calls[5][1] == ['--duration', '5']
+    assert calls[6][1] == ['--duration', '5', '--rods', '3']
 
     assert run_all.main(['--quick', '--write', '--page', str(readme)]) == 1
     new = readme.read_text()
