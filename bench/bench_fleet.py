@@ -2,22 +2,31 @@
 
     .venv/bin/python bench/bench_fleet.py [--rods 10] [--duration 60] [--json FILE]
 
-Starts the fleet as a user does (:func:`rotrod_ros.fleet.start`: N simulators in the
-namespaces rod0..rod{N-1} with config/table1.yaml, config/fleet.yaml and the opt-in
-real-time settings of config/realtime.yaml), in a private network namespace through
-test/isolate.py, and subscribes to every rod's ``joint_states``. Over ``--duration``
-seconds it measures, per rod: the publication lag behind simulated time (the DDS
-source timestamp minus the stamp) at p99 and maximum, and the messages received
-against the 100 Hz expected; and the CPU of all the fleet's processes. Two runs: every
-rod fed by its own profile publisher (Eq. 26 in a loop, the fleet at work), and the
-simulators alone, for comparison. The measurement starts SETTLE s after every rod moves:
-a participant joining the DDS graph (a process starting) was seen to stall the
-others' writes by up to 0.3 s. The issue's targets: every rod p99 lag <= 1 ms,
-max <= 5 ms, 100 % of the messages.
+Starts the fleet as a user does (:func:`rotrod_ros.fleet.start`, what ``rotrod fleet``
+runs: N simulators in the namespaces rod0..rod{N-1} with config/table1.yaml,
+config/fleet.yaml and the opt-in real-time settings of config/realtime.yaml), in a
+private network namespace through test/isolate.py, and subscribes to every rod's
+``joint_states``. Over ``--duration`` seconds it measures, per rod: the publication lag
+behind simulated time (the DDS source timestamp minus the stamp) at p99 and maximum,
+and the messages received against the 100 Hz expected; and the CPU of the fleet's
+processes and of this observer. Two runs:
+
+- every rod spinning at 2 rad/s on one setpoint sent to its ``cmd/omega`` (the
+  rod whirls, the tip past the 3 mm criterion): the issue's targets, every rod p99
+  lag <= 1 ms, max <= 5 ms, 100 % of the messages;
+- every rod streamed by a profile publisher of its own (Eq. 26 in a loop at 100 Hz:
+  twenty processes), compared in the same run.
+
+The observer takes each message as its serialized bytes and reads the stamp from
+them (deserializing 1000 JointState messages a second in Python would cost the
+machine more than a rod). The measurement starts SETTLE s after every rod moves: a
+participant joining the DDS graph (a process starting) was seen to stall the others'
+writes by up to 0.3 s.
 """
 
 import argparse
 import os
+import struct
 import sys
 import tempfile
 import time
@@ -35,25 +44,51 @@ if not os.environ.get('ROTROD_ISOLATION'):
 
 import results  # noqa: E402  (bench/results.py)
 from bench_realtime import REALTIME_PARAMS, use_this_checkout  # noqa: E402
-from node_probes import collect, cpu_seconds, stamp  # noqa: E402
+from node_probes import cpu_seconds  # noqa: E402
 from results import Comparison, Row, Target  # noqa: E402
 from ros_harness import configure_ros_environment, rclpy_test_node  # noqa: E402
 
 configure_ros_environment()
 
+from rclpy.serialization import deserialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
+from std_msgs.msg import Float64  # noqa: E402
 
 from rotrod_ros import fleet  # noqa: E402
 
 PERIOD = 0.01
+OMEGA = 2.0
+"""The rods' speed, rad/s: the paper's."""
 SETTLE = 2.0
 """Wall seconds between the fleet at work and the measurement's start."""
 
 
+def stamps(node, topic: str) -> list:
+    """Subscribe to ``topic`` (JointState) as bytes; return the list of (message bytes,
+    DDS source time s), filled as messages arrive."""
+    out: list = []
+    node.node.create_subscription(
+        JointState, topic, lambda raw, info: out.append((raw, info['source_timestamp'] * 1e-9)),
+        1000, raw=True)
+    return out
+
+
+def stamp_of(raw: bytes) -> float:
+    """header.stamp of a serialized message, s (CDR little endian: int32 s, uint32 ns)."""
+    if raw[1] != 1:
+        raise ValueError(f'not little-endian CDR: encapsulation {raw[:4]!r}')
+    sec, nanosec = struct.unpack_from('<iI', raw, 4)
+    return sec + 1e-9 * nanosec
+
+
+def velocity(received: list) -> float:
+    """The hub's angular velocity in the newest message, rad/s."""
+    return deserialize_message(received[-1][0], JointState).velocity[0]
+
+
 def fleet_run(node, rods: int, duration: float, profile: bool) -> dict:
     """One run of the fleet; per-rod lag and messages, total CPU."""
-    joints = {ns: collect(node, f'{ns}/joint_states', JointState)
-              for ns in fleet.namespaces(rods)}
+    joints = {ns: stamps(node, f'{ns}/joint_states') for ns in fleet.namespaces(rods)}
     with tempfile.TemporaryDirectory(prefix='rotrod-fleet-') as logs:
         procs = fleet.start(rods, Path(logs), profile=profile,
                             params_files=[REALTIME_PARAMS], env=dict(os.environ))
@@ -62,14 +97,24 @@ def fleet_run(node, rods: int, duration: float, profile: bool) -> dict:
                             'every rod publishing')
             if profile:         # every stream under way: a joining participant (the
                 node.spin_until(  # publisher starting) stalls DDS writes up to ~0.3 s
-                    lambda: all(j[-1][0].velocity[0] > 0 for j in joints.values()), 60,
+                    lambda: all(velocity(j) > 0 for j in joints.values()), 60,
                     'every rod streamed')
+            else:               # one setpoint each, as a user sends it
+                for ns in joints:
+                    pub = node.node.create_publisher(Float64, f'{ns}/cmd/omega', 10)
+                    node.spin_until(lambda p=pub: p.get_subscription_count() > 0, 30,
+                                    f'{ns}/cmd/omega matched')
+                    pub.publish(Float64(data=OMEGA))
+                node.spin_until(lambda: all(velocity(j) == OMEGA for j in joints.values()),
+                                60, f'every rod at {OMEGA} rad/s')
             node.spin_for(SETTLE)
             pids = {name: p.pid for name, (p, _) in procs.procs.items()}
             c0 = {n: cpu_seconds(p) for n, p in pids.items()}
+            own0 = time.process_time()
             t0, n0 = time.monotonic(), {ns: len(j) for ns, j in joints.items()}
             node.spin_for(duration)
             c1 = {n: cpu_seconds(p) for n, p in pids.items()}
+            own1 = time.process_time()
             t1, n1 = time.monotonic(), {ns: len(j) for ns, j in joints.items()}
         finally:
             procs.stop_all()
@@ -77,14 +122,16 @@ def fleet_run(node, rods: int, duration: float, profile: bool) -> dict:
     per_rod = {}
     for ns, j in joints.items():
         rows = j[n0[ns]:n1[ns]]
-        lag = np.array([s for _, s, _ in rows]) - np.array([stamp(m) for m, _, _ in rows])
+        lag = np.array([source for _, source in rows]) - np.array([stamp_of(raw)
+                                                                    for raw, _ in rows])
         per_rod[ns] = {'messages': len(rows), 'expected': round(span / PERIOD),
                        'lag_ms_p99': 1e3 * float(np.percentile(np.abs(lag), 99)),
                        'lag_ms_max': 1e3 * float(np.max(np.abs(lag)))}
     sims = [n for n in pids if n.endswith('_simulator')]
     return {'rods': rods, 'profile': profile, 'duration_s': span, 'per_rod': per_rod,
             'cpu_percent_simulators': 100 * sum(c1[n] - c0[n] for n in sims) / span,
-            'cpu_percent_all': 100 * sum(c1[n] - c0[n] for n in pids) / span}
+            'cpu_percent_all': 100 * sum(c1[n] - c0[n] for n in pids) / span,
+            'cpu_percent_observer': 100 * (own1 - own0) / span}
 
 
 def worst(run: dict) -> dict:
@@ -98,29 +145,36 @@ def measure(rods: int = 10, duration: float = 60.0) -> tuple:
     """Both fleet runs; return (:class:`results.Row` list, raw results)."""
     code = use_this_checkout()
     with rclpy_test_node('rotrod_fleet_bench') as node:
-        busy = fleet_run(node, rods, duration, profile=True)
-        alone = fleet_run(node, rods, duration, profile=False)
-    w, a = worst(busy), worst(alone)
-    label = f'{rods} simulators without profile publishers ({alone["duration_s"]:.0f} s run)'
-    title = f'fleet of {rods} rods, each streamed Eq. 26 ({busy["duration_s"]:.0f} s run)'
+        spinning = fleet_run(node, rods, duration, profile=False)
+        streamed = fleet_run(node, rods, duration, profile=True)
+    w, b = worst(spinning), worst(streamed)
+    label = (f'each rod streamed Eq. 26 by a profile publisher of its own, 2 x {rods} '
+             f'processes ({streamed["duration_s"]:.0f} s run)')
+    title = (f'fleet of {rods} rods in real time, each at {OMEGA:g} rad/s on one setpoint '
+             f'({spinning["duration_s"]:.0f} s run)')
 
     def row(name, value, unit, **kw):
         return Row('fleet', f'{title}: {name}', value, unit, **kw)
 
+    def cpu_note(run):
+        return (f"{run['cpu_percent_simulators'] / rods:.1f} % per rod; all the fleet's "
+                f"processes {run['cpu_percent_all']:.0f} %, this observer "
+                f"{run['cpu_percent_observer']:.0f} %")
+
     out = [
         row('publication lag p99, worst rod', w['p99'], 'ms', target=Target('<=', 1),
-            fmt='.2f', comparisons=[Comparison(label, a['p99'])]),
+            fmt='.2f', comparisons=[Comparison(label, b['p99'])]),
         row('publication lag max, worst rod', w['max'], 'ms', target=Target('<=', 5),
-            fmt='.2f', comparisons=[Comparison(label, a['max'])]),
+            fmt='.2f', comparisons=[Comparison(label, b['max'])]),
         row('messages received, worst rod', w['received'], '% of expected',
             better='higher', target=Target('>=', 100), fmt='.2f',
-            comparisons=[Comparison(label, a['received'])]),
-        row('CPU of the simulators, total', busy['cpu_percent_simulators'], '% of one core',
-            fmt='.0f', note=f"{busy['cpu_percent_simulators'] / rods:.1f} % per rod; all "
-                            f"processes {busy['cpu_percent_all']:.0f} %",
-            comparisons=[Comparison(label, alone['cpu_percent_simulators'])]),
+            comparisons=[Comparison(label, b['received'])]),
+        row('CPU of the simulators, total', spinning['cpu_percent_simulators'],
+            '% of one core', fmt='.0f', note=cpu_note(spinning),
+            comparisons=[Comparison(f'{label}; {cpu_note(streamed)}',
+                                    streamed['cpu_percent_simulators'])]),
     ]
-    return out, {'simulator_code': code, 'busy': busy, 'alone': alone}
+    return out, {'simulator_code': code, 'spinning': spinning, 'streamed': streamed}
 
 
 def per_rod_table(run: dict) -> str:
@@ -143,7 +197,7 @@ def main() -> int:
     print(f'# rotrod fleet benchmark ({args.rods} rods, {args.duration:g} s runs, '
           f'{os.cpu_count()} cores)\n')
     print(results.markdown(rows, bench_column=False))
-    for name in ('busy', 'alone'):
+    for name in ('spinning', 'streamed'):
         print(f'\n{name}:\n\n{per_rod_table(raw[name])}')
     if args.json:
         results.dump(args.json, rows, date=datetime.now(timezone.utc).isoformat(), **raw)

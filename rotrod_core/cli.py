@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -273,25 +272,34 @@ def cmd_urdf(args) -> int:
 
 def cmd_fleet(args) -> int:
     """A fleet of rods through the ROS nodes: ``python -m rotrod_ros.fleet``'s arguments."""
-    # like the demo, the fleet's orchestration lives with the nodes; this process becomes
-    # it (exec), so that a signal to `rotrod fleet` reaches the fleet and stops every node
+    return _become([sys.executable, '-m', 'rotrod_ros.fleet', *args.fleet_args])
+
+
+def _become(command: list[str]) -> int:
+    """Replace this process by ``command`` (exec); it does not return.
+
+    The nodes' orchestration (the demo, the fleet) lives with the nodes, above the core,
+    so it runs as a program of its own; becoming it, rather than waiting for a child,
+    lets Ctrl-C and SIGTERM reach it, so that it stops its nodes and finishes its files
+    (subprocess.call would SIGKILL a child on KeyboardInterrupt).
+    """
     sys.stdout.flush()
     sys.stderr.flush()
-    os.execv(sys.executable, [sys.executable, '-m', 'rotrod_ros.fleet', *args.fleet_args])
+    os.execv(command[0], command)
+    raise AssertionError('unreachable')   # execv returns only by raising OSError
 
 
 def cmd_demo(args) -> int:
     """The paper's Eq. 26 scenario through the ROS nodes (or offline), per-stage summary."""
     if not args.offline:
-        # the nodes' orchestration lives with the nodes (rotrod_ros), which sit above the
-        # core: it runs as a process of its own, so the core imports nothing of them
+        # the nodes' orchestration lives with the nodes (rotrod_ros), above the core
         command = [sys.executable, '-m', 'rotrod_ros.demo', '-o', str(args.output),
                    '--profile', args.profile]
         if args.speed is not None:
             command += ['--speed', repr(args.speed)]
         if args.real_time:
             command.append('--real-time')
-        return subprocess.call(command)
+        return _become(command)
     params = RodParams()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
