@@ -63,8 +63,8 @@ def stream(ros_processes, ros_node, ns, files, params=None):
     Returns the publisher's output and the rows t, theta, w, Q, u, v the simulator
     published until SETTLE + WINDOW s after the stream's end.
     """
-    start_simulator(ros_processes, ns, *files, real_time_factor=SPEED, setpoint_delay=DELAY,
-                    markers=False)
+    sim = start_simulator(ros_processes, ns, *files, real_time_factor=SPEED,
+                          setpoint_delay=DELAY, markers=False)
     joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
     deflection = ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
     ros_args = ros_arguments(namespace=ns, params={'use_sim_time': True, **(params or {})})
@@ -75,6 +75,9 @@ def stream(ros_processes, ros_node, ns, files, params=None):
     t_end = stamp(joint[-1])
     ros_node.spin_until(lambda: stamp(joint[-1]) >= t_end + DELAY + SETTLE + WINDOW, 60,
                         'the hold after the stream')
+    # stopped before the next stream: faster than real time the simulator publishes the
+    # global /clock, which the next stream's publisher (use_sim_time) would also follow
+    sim.stop()
     return pub.output, by_time(joint, deflection)
 
 
