@@ -19,7 +19,6 @@ DDS stays on this machine unless the caller set otherwise
 from __future__ import annotations
 
 import argparse
-import ctypes
 import math
 import os
 import random
@@ -27,7 +26,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import IO, Any
 
@@ -43,6 +42,7 @@ from rotrod_core.command.profiles import Eq26Profile, SpinUpProfile
 from rotrod_core.command.registry import describe, profile_from_options
 from rotrod_core.reporting import recording
 
+from .child_process import ending_with_this_process
 from .install import executable, share_file
 from .parameters import defaults, rod_params
 
@@ -117,27 +117,6 @@ def node_commands(output: Path, speed: float | None, real_time: bool, profile: s
     }
 
 
-PR_SET_PDEATHSIG = 1
-"""prctl(2) option: the signal a process gets when the one that started it ends."""
-
-
-def _stop_with(parent: int) -> Callable[[], None]:
-    """A ``preexec_fn``: the child gets SIGTERM when ``parent`` ends, even by SIGKILL.
-
-    So a killed demo or fleet leaves no node running (at real-time priority) behind
-    it. Linux only; elsewhere nothing is asked.
-    """
-    def arm() -> None:
-        try:
-            prctl = ctypes.CDLL(None, use_errno=True).prctl
-        except (OSError, AttributeError):
-            return
-        prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
-        if os.getppid() != parent:          # it ended before the request took effect
-            os.kill(os.getpid(), signal.SIGTERM)
-    return arm
-
-
 class Processes:
     """The node processes, each logging to its own file; they end with this process."""
 
@@ -149,8 +128,8 @@ class Processes:
     def start(self, name: str, cmd: list[str]) -> subprocess.Popen:
         """Start ``cmd`` as ``name`` in its own session, output to ``<name>.log``."""
         log = open(self.log_dir / f'{name}.log', 'w')  # closed in stop()
-        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=self.env,
-                                start_new_session=True, preexec_fn=_stop_with(os.getpid()))
+        proc = subprocess.Popen(ending_with_this_process(cmd), stdout=log,
+                                stderr=subprocess.STDOUT, env=self.env, start_new_session=True)
         self.procs[name] = (proc, log)
         return proc
 

@@ -59,6 +59,8 @@ from typing import Any
 
 import pytest
 
+from rotrod_ros.child_process import ending_with_this_process
+
 PACKAGE = 'rotrod'
 DEFAULT_RMW = 'rmw_fastrtps_cpp'
 # Fast DDS on Linux: domain ids 0..101 keep the ports out of the ephemeral range.
@@ -150,17 +152,6 @@ def configure_ros_environment(environ: dict[str, str] | None = None) -> dict[str
 
 # Run by `python -S -c` in the child before the real command: die with the parent (the
 # thread that started us), even if pytest is killed with SIGKILL or os._exit().
-_TRAMPOLINE = (
-    'import ctypes, os, sys\n'
-    'ctypes.CDLL(None, use_errno=True).prctl(1, 9)  # PR_SET_PDEATHSIG, SIGKILL\n'
-    'if os.getppid() != int(sys.argv[1]):\n'
-    '    os._exit(137)\n'
-    'try:\n'
-    '    os.execvp(sys.argv[2], sys.argv[2:])\n'
-    'except OSError as exc:\n'
-    '    print(f"ros_harness: cannot execute {sys.argv[2]!r}: {exc}", flush=True)\n'
-    '    os._exit(127)\n'
-)
 
 _LIVE: set[NodeProcess] = set()
 
@@ -225,9 +216,7 @@ class NodeProcess:
         self._reader = open(self.log_path, 'rb')
         self._decoder = codecs.getincrementaldecoder('utf-8')(errors='replace')
         self._text = ''
-        argv = self.cmd
-        if sys.platform.startswith('linux'):
-            argv = [sys.executable, '-S', '-c', _TRAMPOLINE, str(os.getpid()), *self.cmd]
+        argv = ending_with_this_process(self.cmd, signal.SIGKILL)
         self.started_at = time.monotonic()
         try:
             self.popen = subprocess.Popen(
