@@ -43,16 +43,31 @@ def command(names, velocity=(), effort=(), position=()):
     return msg
 
 
-def stream(ros_node, pub, make, seconds, rate=UPDATE_RATE):
-    """Publish ``make(k)`` at ``rate`` Hz of wall time for ``seconds`` (None: skip)."""
+def stream(ros_node, pub, make, seconds, rate=UPDATE_RATE, until=None):
+    """Publish ``make(k)`` at ``rate`` Hz of wall time for ``seconds`` (None: skip).
+
+    With ``until``, publish until it holds instead, failing after ``seconds``: a loaded
+    machine can start the simulator's motion late, and a fixed wall-clock length would
+    then cut a phase short.
+    """
     t0 = time.monotonic()
     for k in range(round(seconds * rate)):
+        if until is not None and until():
+            return
         due = t0 + k / rate
         while (left := due - time.monotonic()) > 0:
             ros_node.spin_once(min(left, 0.002))
         msg = make(k)
         if msg is not None:
             pub.publish(msg)
+    assert until is None or until(), f'not reached in {seconds} s of streaming'
+
+
+def hub_velocity_held(joint, value, seconds) -> bool:
+    """Whether the last ``seconds`` of joint_states all have the hub at ``value`` rad/s."""
+    n = round(seconds / PERIOD)
+    return len(joint) >= n and all(
+        m.velocity[list(m.name).index('hub')] == value for m in joint[-n:])
 
 
 def hub_values(joint):
@@ -96,10 +111,12 @@ def test_velocity_commands_as_the_interface_sends_them_ramp_w_as_cmd_omega_does(
     w1, w2 = 0.5, 0.25
     # a block where only hub has a velocity command interface: one entry, names shuffled
     packed = ['tip_radial', 'hub', 'tip_tangential']
-    stream(ros_node, pub, lambda k: command(packed, velocity=[w1]), 1.6)
+    stream(ros_node, pub, lambda k: command(packed, velocity=[w1]), 10.0,
+           until=lambda: hub_velocity_held(joint, w1, 0.4))
     # every joint with a velocity interface: one entry per name, read by name
     full = ['tip_tangential', 'tip_radial', 'hub']
-    stream(ros_node, pub, lambda k: command(full, velocity=[7.0, -3.0, w2]), 1.0)
+    stream(ros_node, pub, lambda k: command(full, velocity=[7.0, -3.0, w2]), 10.0,
+           until=lambda: hub_velocity_held(joint, w2, 0.1))
     ros_node.spin_until(lambda: joint and joint[-1].velocity[0] == w2, 5, 'w = w2')
     rows = hub_values(joint)
     t, w = rows[:, 0], rows[:, 2]
