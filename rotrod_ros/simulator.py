@@ -32,6 +32,7 @@ from rotrod_core.live.engine import EngineConfig, SimulationEngine
 from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
+from rotrod_core.model.scene import scene
 
 from . import interfaces, messages, node_main, parameter_specs
 from .interfaces import pub, srv, sub
@@ -108,6 +109,8 @@ class SimulatorNode(Node):
         self._observation = Observation(settings)
         prefix = settings.frame_prefix
         self._rotor_frame, self._world_frame = prefix + ROTOR_FRAME, prefix + WORLD_FRAME
+        self._marker_frames = messages.MarkerFrames(self._world_frame, MARKER_NAMESPACE)
+        self._messages = messages.SampleMessages(self._rotor_frame, self._world_frame)
         self._status_name = f'{self.get_fully_qualified_name()}: simulation'
         self.loop = RealTimeLoop(
             SimulationEngine(engine_config), settings, self._publish,
@@ -233,29 +236,29 @@ class SimulatorNode(Node):
                  estimator: WhirlEstimator | None) -> None:
         st, stamp, obs = s.state, messages.stamp(s.stamp), self._observation
         wait = not settings.real_time_factor       # as fast as possible: lossless
-        send = self._keep_all.send
+        send, m = self._keep_all.send, self._messages
         u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
-        send('joint_states', messages.joint_state(stamp, st, s.torque), wait)
-        send('tip/deflection', messages.deflection(stamp, u, v, self._rotor_frame), wait)
-        send('tip/position', messages.position(stamp, s.position, self._world_frame), wait)
-        send('frequencies', messages.frequencies(*s.frequencies), wait)
+        send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque), wait)
+        send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
+        send('tip/position', messages.set_position(m.position, stamp, s.position), wait)
+        send('frequencies', messages.set_frequencies(m.frequencies, *s.frequencies), wait)
         io = self._io
         if settings.publishes_clock:
             io['/clock'].publish(messages.clock(stamp))
         if estimator is not None:
             estimate = estimator.push(s.time, u, v)
             if estimate is not None:
-                send('frequencies/estimate', messages.frequencies(estimate.f1, estimate.f2),
-                     wait)
+                send('frequencies/estimate',
+                     messages.set_frequencies(m.estimate, estimate.f1, estimate.f2), wait)
         if s.markers:
             theta = float(st.theta)
             rod = rod_centerline(config.params, float(st.u), float(st.v), theta,
                                  scale=settings.marker_deflection_scale).tolist()
-            io['markers'].publish(messages.markers(
-                stamp, self._world_frame, MARKER_NAMESPACE, disk_radius=settings.disk_radius,
-                theta=theta, rod=rod, rod_diameter=float(config.params.rod_diameter),
+            io['markers'].publish(self._marker_frames.frame(stamp, scene(
+                disk_radius=settings.disk_radius, theta=theta, rod=rod,
+                rod_diameter=float(config.params.rod_diameter),
                 mass_radius=sphere_radius(float(config.params.mass)),
-                trail=obs.trail(rod[-1])))
+                trail=obs.trail(rod[-1]))))
 
     def _publish_status(self, status: Status) -> None:
         self._io['/diagnostics'].publish(messages.diagnostics(

@@ -619,7 +619,35 @@ class SimulationEngine:
         return stable
 
     def health(self) -> Health:
-        """The session's health level and its reason.
+        """The session's health level, its reason and the values behind them.
+
+        :meth:`condition`'s level and message with :meth:`status_values`.
+        """
+        level, message = self.condition()
+        return Health(level, message, self.status_values())
+
+    def status_values(self) -> tuple:
+        """(name, value) pairs of the session's state and counters, SI units in names."""
+        cfg, s = self.config, self.state
+        return (('time_s', self.time), ('omega_rad_s', s.omega), ('u_m', s.u), ('v_m', s.v),
+                ('deflection_m', self.deflection),
+                ('deflection_limit_m', cfg.deflection_limit),
+                ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
+                ('coupling', cfg.coupling),
+                *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
+                ('accepted_commands', self.accepted_commands),
+                ('rejected_commands', self.rejected_commands),
+                ('command_timeout_s', cfg.command_timeout),
+                ('command_age_s', self.command_age), ('command_timeouts', self.timeouts),
+                ('peak_deflection_m', self.peak_deflection),
+                ('peak_deflection_time_s', self.peak_deflection_at),
+                ('critical_deflection_first_crossed_s',
+                 'never' if self.first_crossed_at is None else self.first_crossed_at),
+                ('critical_deflection_crossings', self.limit_crossings),
+                ('max_deflection_m', cfg.max_deflection))
+
+    def condition(self) -> tuple[int, str]:
+        """The session's health level and its reason, without the values (cheap).
 
         ERROR when halted, or while the deflection is beyond ``deflection_limit`` (the
         critical deflection: the simulation goes on); WARN when the deflection is
@@ -627,26 +655,11 @@ class SimulationEngine:
         unstable range, or the command timeout has run out (until a command comes);
         else OK. Whatever the level, every other reason is in the message too.
         """
-        cfg, s = self.config, self.state
-        r = self.deflection
-        w = abs(float(s.omega))
-        values = (('time_s', self.time), ('omega_rad_s', s.omega), ('u_m', s.u), ('v_m', s.v),
-                  ('deflection_m', r), ('deflection_limit_m', cfg.deflection_limit),
-                  ('hub_torque_Nm', self.torque), ('drive', cfg.drive),
-                  ('coupling', cfg.coupling),
-                  *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
-                  ('accepted_commands', self.accepted_commands),
-                  ('rejected_commands', self.rejected_commands),
-                  ('command_timeout_s', cfg.command_timeout),
-                  ('command_age_s', self.command_age), ('command_timeouts', self.timeouts),
-                  ('peak_deflection_m', self.peak_deflection),
-                  ('peak_deflection_time_s', self.peak_deflection_at),
-                  ('critical_deflection_first_crossed_s',
-                   'never' if self.first_crossed_at is None else self.first_crossed_at),
-                  ('critical_deflection_crossings', self.limit_crossings),
-                  ('max_deflection_m', cfg.max_deflection))
         if self.halted:
-            return Health(ERROR, self.halted, values)
+            return ERROR, self.halted
+        cfg = self.config
+        omega = float(self.state.omega)
+        r, w = self.deflection, abs(omega)
         errors, warnings = [], []
         if self.beyond_limit_since is not None:
             errors.append(
@@ -672,14 +685,14 @@ class SimulationEngine:
                 warnings.append(f'|omega| {w:.4g} rad/s within {cfg.critical_margin:.0%} of '
                                 f'the critical speed {wc:.4g} rad/s '
                                 f'({name.replace("_", " ")})')
-        if not self.stable_at(float(s.omega)):
-            warnings.append(f'omega {s.omega:.4g} rad/s is in an unstable range: '
+        if not self.stable_at(omega):
+            warnings.append(f'omega {omega:.4g} rad/s is in an unstable range: '
                             'the free vibration grows')
         if errors:
-            return Health(ERROR, '; '.join(errors + warnings), values)
+            return ERROR, '; '.join(errors + warnings)
         if warnings:
-            return Health(WARN, '; '.join(warnings), values)
-        return Health(OK, 'running', values)
+            return WARN, '; '.join(warnings)
+        return OK, 'running'
 
 
 __all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health',

@@ -593,8 +593,7 @@ class RealTimeLoop(Generic[SettingsT]):
             return
         self._next_level_check = now + LEVEL_CHECK
         with self.lock:
-            health = self.engine.health()
-            level, message = health.level, health.message
+            level, message = self.engine.condition()
             if self.failure:
                 level, message = ERROR, self.failure
             elif self.paused:
@@ -604,7 +603,7 @@ class RealTimeLoop(Generic[SettingsT]):
                 return
             self._last_level = level
             self._next_status = now + 1.0 / self.settings.diagnostics_rate
-            values = (*health.values, ('paused', self.paused),
+            values = (*self.engine.status_values(), ('paused', self.paused),
                       ('real_time_factor', self.settings.real_time_factor),
                       ('overruns', self.overruns), ('publications', self.publications),
                       ('dropped_commands', self.dropped_commands),

@@ -9,7 +9,7 @@ import rotrod_core.model.equations as model
 from rotrod_core.model.equations import Coefficients, State, check_coupling, make_state
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import NonFiniteStateError, finite_number
-from rotrod_core.numerics.rk4 import rk4_step
+from rotrod_core.numerics.rk4 import rk4_step, rk4_step_prescribed_rotation
 
 
 class RealTimeStepper:
@@ -41,7 +41,7 @@ class RealTimeStepper:
         self.params = params
         self.coupling = coupling
         self._co = Coefficients.from_params(params)
-        self._velocity_rates = partial(model.velocity_drive_rates, self._co)
+        self._accelerations = partial(model.deflection_accelerations, self._co)
         self._torque_rates = partial(model.torque_drive_rates, self._co, coupling=coupling)
         self.reset(initial)
 
@@ -64,7 +64,10 @@ class RealTimeStepper:
 
     def _accept(self, new: tuple, drive_name: str, drive_value: float) -> State:
         """Take the new state, unless it or the drive's value at its end is not finite."""
-        if not all(math.isfinite(x) for x in new):
+        u, v, du, dv, theta, omega = new
+        isfinite = math.isfinite
+        if not (isfinite(u) and isfinite(v) and isfinite(du) and isfinite(dv)
+                and isfinite(theta) and isfinite(omega)):
             raise NonFiniteStateError(
                 f'step at t={self.time:.6f} s gave a non-finite state {new}; state kept')
         if not math.isfinite(drive_value):
@@ -81,7 +84,7 @@ class RealTimeStepper:
         Afterwards :attr:`torque` is the hub torque the drive must supply (N m).
         """
         wd = finite_number('omega_dot', omega_dot)
-        new = rk4_step(self._velocity_rates, self._state, self.dt, wd, wd, wd)
+        new = rk4_step_prescribed_rotation(self._accelerations, self._state, self.dt, wd)
         torque = model.hub_torque(self._co, new, wd, self.coupling)
         state = self._accept(new, 'hub torque', torque)
         self.omega_dot = wd
@@ -112,7 +115,10 @@ class RealTimeStepper:
         """Change the hub's angular velocity instantly to ``omega`` (rad/s), physically."""
         w = finite_number('omega', omega)
         new = model.omega_jump(self._co, self._state, w)
-        if not all(math.isfinite(x) for x in new):
+        u, v, du, dv, theta, omega = new
+        isfinite = math.isfinite
+        if not (isfinite(u) and isfinite(v) and isfinite(du) and isfinite(dv)
+                and isfinite(theta) and isfinite(omega)):
             raise NonFiniteStateError(f'a jump to omega={w!r} rad/s gives a non-finite state '
                                       f'{tuple(new)}; state kept')
         self._state = new

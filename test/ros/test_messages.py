@@ -36,3 +36,40 @@ def test_messages_carry_units_frames_and_labels():
                            rod_diameter=0.003, mass_radius=0.02, trail=[rod[-1], rod[-1]])
     assert [m.id for m in arr.markers] == [0, 1, 2, 3, 4]
     assert all(m.header.frame_id == 'world' for m in arr.markers)
+
+
+def test_marker_frames_updated_in_place_equal_fresh_arrays():
+    """Frame after frame (trail growing from none, the spoke turning, the rod bending),
+    the array updated in place equals one made fresh for the same shapes."""
+    from rotrod_core.model.scene import scene
+    frames = messages.MarkerFrames('rod1/world', 'rotrod')
+    trail = []
+    for k in range(6):
+        theta, u = 0.4 * k, 1e-3 * (k - 2)
+        rod = rod_centerline(RodParams(), u, 2e-4, theta).tolist()
+        trail.append(tuple(rod[-1]))
+        t = messages.stamp(0.05 * k)
+        kw = dict(disk_radius=0.15 + 0.01 * (k == 4), theta=theta, rod=rod,
+                  rod_diameter=0.003, mass_radius=0.02, trail=list(trail))
+        updated = frames.frame(t, scene(**kw))
+        fresh = messages.markers(t, 'rod1/world', 'rotrod', **kw)
+        assert updated == fresh
+        assert [m.id for m in updated.markers] == ([0, 1, 2, 3] if k == 0 else
+                                                    [0, 1, 2, 3, 4])
+        assert all(m.header.stamp == t for m in updated.markers)
+
+
+def test_sample_messages_written_anew_equal_fresh_messages():
+    """The node's reused messages, written sample after sample, equal fresh ones."""
+    m = messages.SampleMessages('rod1/rotor', 'rod1/world')
+    for k in range(3):
+        t = messages.stamp(0.01 * k)
+        state = State(1e-3 * k, -2e-4, 0.01, -0.02 * k, 0.5 * k, 2.0 + k)
+        assert messages.set_joint_state(m.joint_state, t, state, 0.1 * k) == \
+            messages.joint_state(t, state, 0.1 * k)
+        assert messages.set_deflection(m.deflection, t, 1e-3 * k, 2e-4) == \
+            messages.deflection(t, 1e-3 * k, 2e-4, 'rod1/rotor')
+        assert messages.set_position(m.position, t, (0.1, 0.2 * k, 0.3)) == \
+            messages.position(t, (0.1, 0.2 * k, 0.3), 'rod1/world')
+        assert messages.set_frequencies(m.estimate, 1.5, 2.0 + k) == \
+            messages.frequencies(1.5, 2.0 + k)
