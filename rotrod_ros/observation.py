@@ -14,17 +14,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rotrod_core.estimation.whirl import WhirlEstimator
+from rotrod_core.estimation.whirl import WhirlEstimator, stream_estimator
 
 from .parameters import NodeSettings
 
 
 def whirl_estimator(settings: NodeSettings) -> WhirlEstimator | None:
     """Whirl-frequency estimator over the published motion (None: estimates off)."""
-    if not settings.estimate_window:
-        return None
-    return WhirlEstimator(settings.estimate_window, settings.publish_period,
-                          1.0 / settings.estimate_rate)
+    return stream_estimator(settings.estimate_window, settings.publish_rate,
+                            settings.estimate_rate)
 
 
 class Observation:

@@ -869,3 +869,15 @@ class WhirlEstimator:
         self._t[:live] = self._t[self._begin:self._end]
         self._z[:live] = self._z[self._begin:self._end]
         self._begin, self._end = 0, live
+
+
+def stream_estimator(window: float, sample_rate: float,
+                     update_rate: float) -> WhirlEstimator | None:
+    """The estimator over a published stream, as the simulator node and its bags run it.
+
+    ``window`` s of samples published at ``sample_rate`` Hz, an estimate every
+    1/``update_rate`` s of sample time; None when ``window`` is 0 (estimates off).
+    """
+    if not window:
+        return None
+    return WhirlEstimator(window, 1.0 / sample_rate, 1.0 / update_rate)

@@ -115,10 +115,7 @@ class RealTimeStepper:
         """Change the hub's angular velocity instantly to ``omega`` (rad/s), physically."""
         w = finite_number('omega', omega)
         new = model.omega_jump(self._co, self._state, w)
-        u, v, du, dv, theta, omega = new
-        isfinite = math.isfinite
-        if not (isfinite(u) and isfinite(v) and isfinite(du) and isfinite(dv)
-                and isfinite(theta) and isfinite(omega)):
+        if not all(math.isfinite(x) for x in new):
             raise NonFiniteStateError(f'a jump to omega={w!r} rad/s gives a non-finite state '
                                       f'{tuple(new)}; state kept')
         self._state = new

@@ -36,7 +36,7 @@ from typing import Final
 import numpy as np
 
 from rotrod_core.analysis.modes import dynamic_frequencies
-from rotrod_core.estimation.whirl import WhirlEstimator
+from rotrod_core.estimation.whirl import stream_estimator
 from rotrod_core.model import interface
 from rotrod_core.model.equations import State
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
@@ -249,9 +249,8 @@ def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dic
     height = float(run.params.rod_length)
     marker_every = max(1, round(settings.publish_rate / settings.marker_rate))
     trail: deque = deque(maxlen=max(1, settings.marker_trail_length))
-    estimator = (WhirlEstimator(settings.estimate_window, 1.0 / settings.publish_rate,
-                                1.0 / settings.estimate_rate)
-                 if settings.estimate_window else None)
+    estimator = stream_estimator(settings.estimate_window, settings.publish_rate,
+                                 settings.estimate_rate)
     mass_radius = sphere_radius(float(run.params.mass))
     rod_diameter = float(run.params.rod_diameter)
 

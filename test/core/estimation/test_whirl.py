@@ -45,7 +45,7 @@ from rotrod_core import (
     modal_analysis,
     simulate,
 )
-from rotrod_core.estimation.whirl import fit_whirls
+from rotrod_core.estimation.whirl import fit_whirls, stream_estimator
 
 P = RodParams()
 DT = 1e-3
@@ -555,3 +555,16 @@ def test_whirl_settings_and_estimator_are_refused_clearly_or_usable(kwargs, wind
     for k in range(5):
         result = est.push(k * est.sample_interval, 1e-3, 0.0)
         assert result is None or not math.isinf(result.f1)
+
+
+def test_stream_estimator_estimates_at_its_update_rate_over_its_window():
+    """At 100 Hz, a 1 s window, 10 estimates a second: the first once the window holds a
+    second of samples, then every tenth sample; Eq. 28's f1 at constant w; 0 s: None."""
+    assert stream_estimator(0.0, 100.0, 10.0) is None
+    est = stream_estimator(1.0, 100.0, 10.0)
+    w = 1.0
+    t = np.arange(300) / 100.0
+    z = step_start(t, w)
+    due = [k for k in range(300) if est.push(t[k], z[k].real, z[k].imag) is not None]
+    assert due[0] in (99, 100) and np.all(np.diff(due) == 10)
+    assert est.estimate.f1 == pytest.approx((W0 - w) / (2 * math.pi), rel=1e-6)
