@@ -25,6 +25,8 @@ process's subscriptions:
   (``cpu_dma_latency:=-1``, the node's default: the thread then polls the clock for the
   last SPIN before each publication), and with the markers and the estimate off (what
   each costs), for comparison;
+* where the physics thread's CPU goes, part by part (bench/node_cpu_parts.py: the
+  node in a child process with a timer around each part of its work);
 * as fast as possible with ``rerun_logger`` recording (KEEP_ALL both ways): speed, and
   the share of the publications in its .rrd file.
 
@@ -313,6 +315,23 @@ def use_this_checkout() -> str:
     return code
 
 
+def cpu_parts(node, duration: float) -> dict:
+    """The physics thread's CPU by part (bench/node_cpu_parts.py), the node in a child
+    process with the real-time runs' parameters, this process subscribed as in them."""
+    params = [f'{k}:={v}' for k, v in {**MOTION, **Simulator.extra}.items()]
+    proc = subprocess.Popen([sys.executable, str(ROOT / 'bench' / 'node_cpu_parts.py'),
+                             str(duration), *params], stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+    joint = collect(node, 'joint_states', JointState)
+    while proc.poll() is None:
+        node.spin_for(0.1)
+    out = proc.stdout.read() if proc.stdout else ''
+    if proc.returncode != 0 or not joint:
+        raise RuntimeError(f'node_cpu_parts.py failed (exit {proc.returncode}, '
+                           f'{len(joint)} joint_states received)')
+    return json.loads(out)
+
+
 def measure(duration: float = 60.0) -> tuple:
     """Run the real-time benchmarks; return (:class:`results.Row` list, raw results)."""
     code = use_this_checkout()
@@ -325,6 +344,7 @@ def measure(duration: float = 60.0) -> tuple:
         events = realtime_run(node, min(10.0, duration), executor='events')
         no_markers = realtime_run(node, min(20.0, duration), markers=False)
         no_estimate = realtime_run(node, min(20.0, duration), estimate_window=0.0)
+        parts = cpu_parts(node, min(20.0, duration))
         ordinary = realtime_run(node, duration, realtime_priority=0)
         asleep = realtime_run(node, duration, cpu_dma_latency=-1)
     floor = sleep_floor(duration)
@@ -333,7 +353,7 @@ def measure(duration: float = 60.0) -> tuple:
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
            'fast': fast, 'fast_recorded': recorded, 'events_executor': events,
            'ordinary_scheduling': ordinary, 'no_markers': no_markers,
-           'no_estimate': no_estimate,
+           'no_estimate': no_estimate, 'cpu_parts': parts,
            'no_cpu_latency_request': asleep, 'sleep_floor': floor,
            'sleep_floor_cpu_latency_0': floor_awake}
     ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
@@ -362,6 +382,14 @@ def measure(duration: float = 60.0) -> tuple:
                            f"({no_estimate['duration_s']:.0f} s run)",
                            no_estimate['cpu_percent_of_one_core']),
                 Comparison(ev, events['cpu_percent_of_one_core'])], fmt='.1f'),
+        *(row(f"physics thread CPU by part ({parts['duration_s']:.0f} s run, a timer around "
+              f"each, in-process): {name}", part['percent'], '% of one core', fmt='.2f',
+              note=f"{part['us_per_call']:.0f} us x {part['calls']} calls")
+          for name, part in parts['parts'].items()),
+        row(f"physics thread CPU by part ({parts['duration_s']:.0f} s run): the loop and "
+            "timers, outside the parts", parts['thread_percent'] - sum(
+                part['percent'] for part in parts['parts'].values()), '% of one core',
+            fmt='.2f', note=f"thread total {parts['thread_percent']:.2f} %"),
         row('publication lag behind simulated time (max)', rt['lag_ms_max'], 'ms',
             target=Target('<=', 2), fmt='.2f',
             note=f"p99 {rt['lag_ms_p99']:.2f} ms, median {rt['lag_ms_median']:.2f} ms",

@@ -1,0 +1,129 @@
+"""Where the simulator node's physics thread spends its CPU time, part by part.
+
+    python bench/node_cpu_parts.py DURATION [NAME:=VALUE ...]   # prints JSON
+
+Runs ``rotrod_ros.simulator.SimulatorNode`` in this process (the parameters of
+``config/realtime.yaml``, the given ones after), with a timer around each part of its
+physics thread's work: the physics steps, each sample topic's message and publication,
+the whirl estimate, the markers' shapes, message and publication, the status check,
+the waits' own overhead. The timers read ``time.thread_time`` (CPU time of the
+calling thread), so the parts add up to the thread's CPU time less what runs outside
+them (the loop itself). Each timer costs about a microsecond per call, which the
+thread's total includes.
+
+Run it where something subscribes to the node's topics (``bench_realtime.py`` does,
+from another process): without a matched reader, DDS does less per publication.
+Prints {"thread_percent": ..., "parts": {name: {"percent": ..., "calls": ...,
+"us_per_call": ...}}, "duration_s": ...} on stdout.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _timed(owner, attr: str, label: str, spent: Counter, calls: Counter) -> None:
+    """Replace ``owner.attr`` by the same callable that adds its thread CPU time."""
+    inner = getattr(owner, attr)
+
+    def timed(*args, **kwargs):
+        t0 = time.thread_time()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            spent[label] += time.thread_time() - t0
+            calls[label] += 1
+    setattr(owner, attr, timed)
+
+
+def _thread_cpu(tid: int) -> float:
+    fields = Path(f'/proc/self/task/{tid}/stat').read_text().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _value(text: str):
+    return yaml.safe_load(text)
+
+
+def measure(duration: float, params: dict) -> dict:
+    """Run the node for ``duration`` s after a 3 s start; the thread's CPU by part."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+
+    import rotrod_ros.messages as messages
+    import rotrod_ros.simulator as simulator
+
+    realtime = yaml.safe_load((ROOT / 'config' / 'realtime.yaml').read_text())
+    values = {**next(iter(realtime.values()))['ros__parameters'], **params}
+    spent: Counter = Counter()
+    calls: Counter = Counter()
+    for fn, label in (('set_joint_state', 'joint_states message'),
+                      ('set_deflection', 'tip/deflection message'),
+                      ('set_position', 'tip/position message'),
+                      ('set_frequencies', 'frequencies messages'),
+                      ('stamp', 'stamps')):
+        _timed(messages, fn, label, spent, calls)
+    for fn, label in (('rod_centerline', 'markers: rod shape'),
+                      ('scene', 'markers: scene shapes')):
+        _timed(simulator, fn, label, spent, calls)
+    rclpy.init(args=[])
+    try:
+        node = simulator.SimulatorNode(parameter_overrides=[
+            Parameter(k, value=v) for k, v in values.items()])
+        loop = node.loop
+        _timed(loop.engine, 'advance', 'physics steps', spent, calls)
+        _timed(loop, 'report', 'status check and /diagnostics', spent, calls)
+        _timed(loop, '_sample', 'sample (frequencies, position)', spent, calls)
+        _timed(loop, '_apply_commands', 'commands', spent, calls)
+        _timed(loop.clock, 'sleep_until', 'waits to each due time', spent, calls)
+        _timed(node._keep_all, 'send', 'publish: sample topics', spent, calls)
+        _timed(node._marker_frames, 'frame', 'markers: message', spent, calls)
+        _timed(node._io['markers'], 'publish', 'markers: publish', spent, calls)
+        estimator = node._observation.estimator
+        if estimator is not None:
+            _timed(estimator, 'push', 'whirl estimate', spent, calls)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        node.start()
+        started = time.monotonic()
+        while time.monotonic() < started + 3.0:
+            executor.spin_once(timeout_sec=0.1)
+        spent.clear()
+        calls.clear()
+        tid = loop._thread.native_id
+        c0, t0 = _thread_cpu(tid), time.monotonic()
+        while time.monotonic() < t0 + duration:
+            executor.spin_once(timeout_sec=0.1)
+        c1, wall = _thread_cpu(tid), time.monotonic() - t0
+        node.stop()
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown()
+    return {'duration_s': wall, 'thread_percent': 100 * (c1 - c0) / wall,
+            'parts': {k: {'percent': 100 * v / wall, 'calls': calls[k],
+                          'us_per_call': 1e6 * v / max(calls[k], 1)}
+                      for k, v in sorted(spent.items(), key=lambda kv: -kv[1])}}
+
+
+def main(argv: list[str]) -> int:
+    duration = float(argv[0])
+    params = {}
+    for arg in argv[1:]:
+        name, _, text = arg.partition(':=')
+        params[name] = _value(text)
+    print(json.dumps(measure(duration, params)))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main(sys.argv[1:]))
