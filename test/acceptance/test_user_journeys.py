@@ -298,7 +298,7 @@ def test_pause_resume_and_reset(ros_processes, ros_node, request):
     obs.wait_until(t_reached + 1.0)
     pause = f'{ns}/rotrod_simulator/pause'
     assert ros_node.call_service(SetBool, pause, SetBool.Request(data=True)).success
-    ros_node.spin_for(0.3)
+    obs.drain(quiet=0.3)            # what was published before the pause is in
     n, last = len(obs.joint), obs.rows()[-1]
     before = obs.hold(t_reached + 0.5)
     ros_node.spin_for(1.0)

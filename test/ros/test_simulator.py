@@ -12,6 +12,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from node_probes import (
     by_time,
     collect,
+    drain,
     get_parameter,
     hann_mean,
     namespace,
@@ -224,7 +225,7 @@ def test_pause_stops_simulated_time_and_resume_continues(ros_processes, ros_node
     ros_node.spin_until(lambda: len(joint) > 10, 10, 'joint_states')
     assert ros_node.call_service(SetBool, f'{ns}/rotrod_simulator/pause',
                                  SetBool.Request(data=True)).success
-    ros_node.spin_for(0.3)
+    drain(ros_node, joint, quiet=0.3)   # what was published before the pause is in
     n = len(joint)
     ros_node.spin_for(0.5)
     assert len(joint) == n
