@@ -17,6 +17,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
 from node_probes import (
     by_time,
+    collect,
     get_parameter,
     namespace,
     omega_publisher,
@@ -123,6 +124,24 @@ class Observer:
             if len(self.joint) == n:
                 return
         raise AssertionError(f'{self.ns}/joint_states still arriving after {timeout:g} s')
+
+
+def stamp_published_after(node, sourced, wall, timeout=10.0):
+    """The stamp of the first message in ``sourced`` (from node_probes.collect) that
+    was published after wall time ``wall`` (its DDS source time).
+
+    After a parameter reply, the simulated time of the change: the last state received
+    may be one published well before it, still queued behind a busy test process.
+    """
+    def first():
+        later = None
+        for m, source, _ in reversed(sourced):      # in the order published
+            if source <= wall:
+                break
+            later = m
+        return later is not None and stamp(later)
+
+    return node.spin_until(first, timeout, 'a state published after the reply')
 
 
 def check_settled_at_2_rad_s(sim, obs, t_reached):
@@ -263,19 +282,20 @@ def test_eccentricity_and_damping_changed_while_running_take_effect(
     ns = namespace(request)
     start_simulator(ros_processes, ns, real_time_factor=FAST)
     obs = Observer(ros_node, ns)
+    sourced = collect(ros_node, f'{ns}/joint_states', JointState)
     omega_publisher(ros_node, ns).publish(Float64(data=2.0))
     t_reached = obs.wait_for_omega(2.0)
     obs.wait_until(t_reached + 2.0)
     # the parameter services, as `ros2 param set` calls them
     assert set_parameters(ros_node, ns, param('eccentricity', 0.05)).results[0].successful
-    t_ecc = stamp(obs.joint[-1])
+    t_ecc = stamp_published_after(ros_node, sourced, time.time())
     assert get_parameter(ros_node, ns, 'eccentricity') == 0.05
     obs.wait_until(t_ecc + 8.0)
     centre, _, residual = fit_hold(obs.hold(t_ecc + 0.5), 2.0)
     assert centre.real == pytest.approx(static_deflection(2.0, 0.05), rel=0.01)
     assert residual < 1e-3
     assert set_parameters(ros_node, ns, param('damping_ratio', 0.05)).results[0].successful
-    t_damp = stamp(obs.joint[-1])
+    t_damp = stamp_published_after(ros_node, sourced, time.time())
     obs.wait_until(t_damp + 8.0)
     hold = obs.hold(t_damp + 0.5)
     centre, _, residual = fit_hold(hold, 2.0, zeta=0.05)         # the damped whirls
