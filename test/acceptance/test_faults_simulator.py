@@ -365,6 +365,11 @@ INVALID = [
 ]
 
 
+REQUESTS = 1500
+"""Set requests hammered (every third one invalid): a fixed number, not as many as fit
+in a fixed time, which a loaded machine answered too few of (about 640 a second here)."""
+
+
 def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         ros_processes, ros_node, request):
     ns = namespace(request)
@@ -379,8 +384,7 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
     accepted = refused = 0
     latencies = []
     t0 = time.monotonic()
-    i = 0
-    while time.monotonic() - t0 < 5.0:
+    for i in range(REQUESTS):
         if i % 3 == 2:
             name, value, reason = INVALID[(i // 3) % len(INVALID)]
             result = client.set_one(name, value)
@@ -394,7 +398,6 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
             latencies.append(time.monotonic() - sent)
             assert result.successful, (name, value, result.reason)
             accepted += 1
-        i += 1
     hammer = (time.monotonic() - t0, len(joint))
     # the end state is the one asked for; a set of values reflected
     for name, value in [('publish_rate', 100.0), ('drive', 'velocity'),
@@ -402,12 +405,14 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         assert client.set_one(name, value).successful
         assert client.get_one(name) == value
     assert client.get_one('mass') == 0.3 and client.get_one('physics_rate') == 1000.0
-    # the publication rate follows publish_rate
+    # the publication rate follows publish_rate: the states published from 0.3 s to
+    # 1.3 s after the change (by DDS source time: those received meanwhile may include
+    # a backlog from before it), once all are in
     assert client.set_one('publish_rate', 50.0).successful
-    ros_node.spin_for(0.3)
-    k = len(joint)
-    ros_node.spin_for(1.0)
-    slow = np.diff([stamp(m) for m, _, _ in joint[k:]])
+    changed = time.time()
+    ros_node.spin_until(lambda: joint[-1][1] >= changed + 1.3, 10, '1.3 s at 50 Hz')
+    slow = np.diff([stamp(m) for m, source, _ in joint
+                    if changed + 0.3 <= source < changed + 1.3])
     assert client.set_one('publish_rate', 100.0).successful
     assert np.allclose(slow, 0.02, atol=1e-6) and 45 <= len(slow) <= 55
     ros_node.spin_for(0.5)
@@ -421,7 +426,6 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
           f'publication gaps max {1e3 * gaps.max():.1f} ms; lag behind simulated time '
           f'median {1e3 * np.median(lag):.2f} ms, p99 {1e3 * np.percentile(lag, 99):.2f} ms, '
           f'max {1e3 * lag.max():.1f} ms')
-    assert accepted >= 100 and refused >= 50
     # publication never stopped (50 Hz at the slowest), no step skipped, time kept pace
     assert gaps.max() < 0.1
     assert np.all(np.diff(st) > 0)
