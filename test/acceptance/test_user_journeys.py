@@ -171,12 +171,16 @@ def test_a_2_rad_s_setpoint_at_10_hz_runs_on_past_the_3_mm_criterion(
     obs = Observer(ros_node, ns)
     pub = omega_publisher(ros_node, ns)
     t_reached = None
-    for _ in range(150):                                          # 15 s at 10 Hz
+    # at 10 Hz until 11 s of the hold at 2 rad/s are in (~15 s: the ramp takes 4 s),
+    # not for a fixed 15 s, which a loaded machine's late start could leave too short
+    deadline = time.monotonic() + 60.0
+    while t_reached is None or stamp(obs.joint[-1]) < t_reached + 11.0:
+        assert time.monotonic() < deadline, (
+            'never reached 2 rad/s' if t_reached is None else 'no 11 s hold within 60 s')
         pub.publish(Float64(data=2.0))
         ros_node.spin_for(0.1)
         if t_reached is None and obs.joint and obs.joint[-1].velocity[0] == 2.0:
             t_reached = stamp(obs.joint[-1])
-    assert t_reached is not None, 'never reached 2 rad/s'
     check_settled_at_2_rad_s(sim, obs, t_reached)
 
 
