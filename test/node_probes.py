@@ -4,6 +4,7 @@ and a process's memory and CPU time."""
 
 import hashlib
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +51,18 @@ def collect(node, topic, msg_type, depth: int = 1000):
         msg_type, topic, lambda m, info: out.append(
             (m, info['source_timestamp'] * 1e-9, info['received_timestamp'] * 1e-9)), depth)
     return out
+
+
+def drain(node, received, quiet: float = 0.3, timeout: float = 10.0) -> None:
+    """Spin until nothing has been added to ``received`` for ``quiet`` s: what was
+    published before now (reliable, queued behind a busy test process) is in."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        n = len(received)
+        node.spin_for(quiet)
+        if len(received) == n:
+            return
+    raise AssertionError(f'messages still arriving after {timeout:g} s')
 
 
 def rss(pid: int) -> int:

@@ -241,17 +241,18 @@ def start_ramp_publisher(ros_processes, ns):
 
 def kill_mid_spin_up(ros_node, publisher, ns, joint, at_omega):
     """SIGKILL the publisher once the stream has passed ``at_omega`` and the simulator
-    follows it; the setpoints received here and the time of the kill."""
-    got = ros_node.subscribe(f'{ns}/cmd/omega', Float64, qos=1000)
+    follows it; the setpoints received here (message, DDS source time, receive time:
+    read them after a wait, the last ones may still be on their way) and the time of
+    the kill."""
+    got = collect(ros_node, f'{ns}/cmd/omega', Float64)
     # the publisher starts on its first subscriber, which may be this node: the
     # simulator must be seen to follow (it gets no samples from before it matched)
-    ros_node.spin_until(lambda: got and got[-1].data >= at_omega and joint
+    ros_node.spin_until(lambda: got and got[-1][0].data >= at_omega and joint
                         and joint[-1][0].velocity[0] >= at_omega - 0.2, 30, 'the spin-up')
     publisher.signal_group(signal.SIGKILL)
     killed = time.time()
     assert publisher.wait(timeout=10) == -signal.SIGKILL
-    ros_node.spin_for(0.2)
-    return [m.data for m in got], killed
+    return got, killed
 
 
 def test_a_killed_sender_leaves_w_at_its_last_setpoint_without_a_command_timeout(
@@ -261,17 +262,18 @@ def test_a_killed_sender_leaves_w_at_its_last_setpoint_without_a_command_timeout
     ros_node.spin_until(lambda: len(joint) > 10 and len(defl) > 10, 20, 'publishing')
     publisher = start_ramp_publisher(ros_processes, ns)
     setpoints, killed = kill_mid_spin_up(ros_node, publisher, ns, joint, 0.5)
-    last = setpoints[-1]
     # the shaper bridges a stall for 0.5 s at the stream's slope, then returns to the
     # last setpoint (at most 0.25 s at 0.5 rad/s^2): held from 1 s after the kill on
     ros_node.spin_until(lambda: stamp(joint[-1][0]) > killed + 3.5, 10, '3.5 s after')
+    last = setpoints[-1][0].data                            # all in by now
     st, _, lag = timing(joint)
     w = np.array([m.velocity[0] for m, _, _ in joint])
     held = w[st > killed + 1.0]
     assert len(held) > 200 and np.all(held == held[0])      # constant, exactly
     # the last setpoint (the simulator and this node may differ by the one sample in
     # flight at the kill)
-    assert abs(held[0] - last) <= 0.25 * PERIOD + 1e-12, (held[0], setpoints[-5:])
+    assert abs(held[0] - last) <= 0.25 * PERIOD + 1e-12, (
+        held[0], [m.data for m, _, _ in setpoints[-5:]])
     assert np.max(np.abs(np.diff(w))) <= A_MAX * PERIOD * (1 + 1e-9)
     uv = np.array([(m.vector.x, m.vector.y) for m, _, _ in defl])
     assert np.all(np.isfinite(uv)) and np.max(np.hypot(*uv.T)) < 0.003
@@ -289,7 +291,7 @@ def test_a_killed_sender_is_spun_down_at_the_acceleration_limit_with_a_command_t
                                                  command_timeout=timeout)
     ros_node.spin_until(lambda: len(joint) > 10 and len(defl) > 10, 20, 'publishing')
     publisher = start_ramp_publisher(ros_processes, ns)
-    _, killed = kill_mid_spin_up(ros_node, publisher, ns, joint, 0.5)
+    setpoints, _ = kill_mid_spin_up(ros_node, publisher, ns, joint, 0.5)
     pattern = re.compile(
         r'no command on cmd/omega or joint_command for 0\.5 s \(command_timeout\)')
     # (the node may already have timed out once at rest, before the stream began)
@@ -298,9 +300,13 @@ def test_a_killed_sender_is_spun_down_at_the_acceleration_limit_with_a_command_t
     ros_node.spin_until(lambda: joint[-1][0].velocity[0] == 0.0, 10, 'spun down to 0')
     t_zero = stamp(joint[-1][0])
     ros_node.spin_until(lambda: stamp(joint[-1][0]) > t_zero + 1.0, 10, '1 s at rest')
+    # the timeout runs from the last setpoint: when it was sent (DDS source time; this
+    # node and the simulator may differ by the one in flight at the kill), not when
+    # this process got round to the kill (a loaded machine may stall the sender before)
+    last_sent = setpoints[-1][1]
     st, _, lag = timing(joint)
     w = np.array([m.velocity[0] for m, _, _ in joint])
-    after = st > killed
+    after = st > last_sent
     # publications are 10 ms of simulated time apart (checked below); the epoch-sized
     # stamps themselves are rounded to ~0.2 us, too coarse for a slope to 1e-9
     slope = np.diff(w[after]) / PERIOD
@@ -314,10 +320,11 @@ def test_a_killed_sender_is_spun_down_at_the_acceleration_limit_with_a_command_t
     assert np.all(slope[: first - 1] >= 0.0), where
     assert -A_MAX < slope[end] <= 0.0 and np.all(w[after][end + 2:] == 0.0), where
     assert np.all(np.abs(slope) <= A_MAX * (1 + 1e-9))       # |w'| bounded throughout
-    # it starts command_timeout after the last setpoint (delivered within ~ms of the kill)
+    # it starts command_timeout after the last setpoint (delivered within ~ms)
     t_first, w_first = st[after][first], w[after][first]
     t_start = t_first - (np.max(w[after]) - w_first) / A_MAX  # back along the ramp to its top
-    assert killed - 0.1 + timeout < t_start < killed + timeout + 0.1, (t_start - killed)
+    assert last_sent - 0.1 + timeout < t_start < last_sent + timeout + 0.1, (
+        t_start - last_sent)
     uv = np.array([(m.vector.x, m.vector.y) for m, _, _ in defl])
     assert np.all(np.isfinite(uv)) and np.max(np.hypot(*uv.T)) < 0.003
     assert np.allclose(np.diff(st), PERIOD, atol=1e-6) and np.median(lag) < 0.005
@@ -331,12 +338,19 @@ def test_a_killed_sender_is_spun_down_at_the_acceleration_limit_with_a_command_t
     pub = ros_node.node.create_publisher(Float64, f'{ns}/cmd/omega', 1000)
     ros_node.spin_until(lambda: pub.get_subscription_count() > 0, 10, 'cmd/omega subscriber')
     n = len(diags)
-    for _ in range(150):
+
+    def resumed():
+        ok = statuses(diags[n:], ns)
+        return (joint[-1][0].velocity[0] == 0.2 and ok
+                and ok[-1].level == DiagnosticStatus.OK)
+
+    # until it shows (a loaded machine delays what this process receives), at most 10 s
+    deadline = time.monotonic() + 10.0
+    while not resumed():
+        assert time.monotonic() < deadline, (
+            joint[-1][0].velocity[0], [x.message for x in statuses(diags[n:], ns)][-3:])
         pub.publish(Float64(data=0.2))
         ros_node.spin_for(PERIOD)
-    assert joint[-1][0].velocity[0] == 0.2
-    ok = statuses(diags[n:], ns)
-    assert ok and ok[-1].level == DiagnosticStatus.OK
     sim.wait_for_output('cmd/omega: commands again after the command timeout', timeout=5)
     assert sim.running
 
@@ -365,6 +379,11 @@ INVALID = [
 ]
 
 
+REQUESTS = 1500
+"""Set requests hammered (every third one invalid): a fixed number, not as many as fit
+in a fixed time, which a loaded machine answered too few of (about 640 a second here)."""
+
+
 def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         ros_processes, ros_node, request):
     ns = namespace(request)
@@ -379,8 +398,7 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
     accepted = refused = 0
     latencies = []
     t0 = time.monotonic()
-    i = 0
-    while time.monotonic() - t0 < 5.0:
+    for i in range(REQUESTS):
         if i % 3 == 2:
             name, value, reason = INVALID[(i // 3) % len(INVALID)]
             result = client.set_one(name, value)
@@ -394,7 +412,6 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
             latencies.append(time.monotonic() - sent)
             assert result.successful, (name, value, result.reason)
             accepted += 1
-        i += 1
     hammer = (time.monotonic() - t0, len(joint))
     # the end state is the one asked for; a set of values reflected
     for name, value in [('publish_rate', 100.0), ('drive', 'velocity'),
@@ -402,12 +419,14 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         assert client.set_one(name, value).successful
         assert client.get_one(name) == value
     assert client.get_one('mass') == 0.3 and client.get_one('physics_rate') == 1000.0
-    # the publication rate follows publish_rate
+    # the publication rate follows publish_rate: the states published from 0.3 s to
+    # 1.3 s after the change (by DDS source time: those received meanwhile may include
+    # a backlog from before it), once all are in
     assert client.set_one('publish_rate', 50.0).successful
-    ros_node.spin_for(0.3)
-    k = len(joint)
-    ros_node.spin_for(1.0)
-    slow = np.diff([stamp(m) for m, _, _ in joint[k:]])
+    changed = time.time()
+    ros_node.spin_until(lambda: joint[-1][1] >= changed + 1.3, 10, '1.3 s at 50 Hz')
+    slow = np.diff([stamp(m) for m, source, _ in joint
+                    if changed + 0.3 <= source < changed + 1.3])
     assert client.set_one('publish_rate', 100.0).successful
     assert np.allclose(slow, 0.02, atol=1e-6) and 45 <= len(slow) <= 55
     ros_node.spin_for(0.5)
@@ -421,7 +440,6 @@ def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
           f'publication gaps max {1e3 * gaps.max():.1f} ms; lag behind simulated time '
           f'median {1e3 * np.median(lag):.2f} ms, p99 {1e3 * np.percentile(lag, 99):.2f} ms, '
           f'max {1e3 * lag.max():.1f} ms')
-    assert accepted >= 100 and refused >= 50
     # publication never stopped (50 Hz at the slowest), no step skipped, time kept pace
     assert gaps.max() < 0.1
     assert np.all(np.diff(st) > 0)
