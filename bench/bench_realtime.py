@@ -47,6 +47,7 @@ import platform
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -319,16 +320,18 @@ def cpu_parts(node, duration: float) -> dict:
     """The physics thread's CPU by part (bench/node_cpu_parts.py), the node in a child
     process with the real-time runs' parameters, this process subscribed as in them."""
     params = [f'{k}:={v}' for k, v in {**MOTION, **Simulator.extra}.items()]
-    proc = subprocess.Popen([sys.executable, str(ROOT / 'bench' / 'node_cpu_parts.py'),
-                             str(duration), *params], stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
-    joint = collect(node, 'joint_states', JointState)
-    while proc.poll() is None:
-        node.spin_for(0.1)
-    out = proc.stdout.read() if proc.stdout else ''
-    if proc.returncode != 0 or not joint:
-        raise RuntimeError(f'node_cpu_parts.py failed (exit {proc.returncode}, '
-                           f'{len(joint)} joint_states received)')
+    with tempfile.TemporaryFile('w+') as log:
+        proc = subprocess.Popen([sys.executable, str(ROOT / 'bench' / 'node_cpu_parts.py'),
+                                 str(duration), *params], stdout=subprocess.PIPE,
+                                stderr=log, text=True)
+        joint = collect(node, 'joint_states', JointState)
+        while proc.poll() is None:
+            node.spin_for(0.1)
+        out = proc.stdout.read() if proc.stdout else ''
+        if proc.returncode != 0 or not joint:
+            log.seek(0)
+            raise RuntimeError(f'node_cpu_parts.py failed (exit {proc.returncode}, '
+                               f'{len(joint)} joint_states received): {log.read()[-2000:]}')
     return json.loads(out)
 
 

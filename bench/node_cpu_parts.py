@@ -51,10 +51,6 @@ def _thread_cpu(tid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
-def _value(text: str):
-    return yaml.safe_load(text)
-
-
 def measure(duration: float, params: dict) -> dict:
     """Run the node for ``duration`` s after a 3 s start; the thread's CPU by part."""
     import rclpy
@@ -121,7 +117,7 @@ def main(argv: list[str]) -> int:
     params = {}
     for arg in argv[1:]:
         name, _, text = arg.partition(':=')
-        params[name] = _value(text)
+        params[name] = yaml.safe_load(text)     # as a params file would read it
     print(json.dumps(measure(duration, params)))
     return 0
 

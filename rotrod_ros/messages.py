@@ -94,8 +94,8 @@ def set_frequencies(msg: Float64MultiArray, f1: float, f2: float) -> Float64Mult
 class SampleMessages:
     """The messages of the sample topics, made once and written anew for each sample.
 
-    Setting a few fields costs a fifth of making the messages (measured: 2.9 against
-    15.6 us a sample); publish one sample's messages before writing the next.
+    Setting a few fields costs much less than making the messages
+    (docs/realtime.md#node-cpu); publish one sample's messages before writing the next.
     """
 
     def __init__(self, rotor_frame: str, world_frame: str) -> None:
@@ -147,8 +147,8 @@ class MarkerFrames:
 
     A frame's MarkerArray is the same object each time, its markers changed where the
     shapes changed: making a Marker and its nested messages costs more than setting a
-    few fields (the node publishes markers at marker_rate; a fresh array per frame
-    was a sixth of its CPU). Publish (or copy) one frame before making the next.
+    few fields (docs/realtime.md#node-cpu). Publish (or copy) one frame before making
+    the next.
     """
 
     def __init__(self, frame_id: str, ns: str) -> None:
@@ -162,12 +162,14 @@ class MarkerFrames:
         self._header.stamp = t
         out = []
         for shape in shapes:
-            m, last = self._markers.get(shape.id, (None, None))
-            if m is None or last is None or last.kind != shape.kind:
+            entry = self._markers.get(shape.id)
+            last: Shape | None = None
+            if entry is not None and entry[1].kind == shape.kind:
+                m, last = entry
+            else:
                 m = Marker(header=self._header, ns=self._ns, id=shape.id,
                            type=getattr(Marker, shape.kind.upper()), action=Marker.ADD)
                 m.pose.orientation.w = 1.0
-                last = None
             if last is None or last.position != shape.position:
                 m.pose.position = Point(x=shape.position[0], y=shape.position[1],
                                         z=shape.position[2])

@@ -53,7 +53,8 @@ def collect(node, topic, msg_type, depth: int = 1000):
     return out
 
 
-def drain(node, received, quiet: float = 0.3, timeout: float = 10.0) -> None:
+def drain(node, received, quiet: float = 0.3, timeout: float = 10.0,
+          what: str = 'messages') -> None:
     """Spin until nothing has been added to ``received`` for ``quiet`` s: what was
     published before now (reliable, queued behind a busy test process) is in."""
     deadline = time.monotonic() + timeout
@@ -62,7 +63,7 @@ def drain(node, received, quiet: float = 0.3, timeout: float = 10.0) -> None:
         node.spin_for(quiet)
         if len(received) == n:
             return
-    raise AssertionError(f'messages still arriving after {timeout:g} s')
+    raise AssertionError(f'{what} still arriving after {timeout:g} s')
 
 
 def rss(pid: int) -> int:

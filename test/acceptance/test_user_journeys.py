@@ -18,6 +18,7 @@ from geometry_msgs.msg import Vector3Stamped
 from node_probes import (
     by_time,
     collect,
+    drain,
     get_parameter,
     namespace,
     omega_publisher,
@@ -117,13 +118,7 @@ class Observer:
     def drain(self, quiet=0.5, timeout=10.0):
         """Spin until no joint state has arrived for ``quiet`` s: what was published
         before now (reliable, queued behind a busy test process) is in."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            n = len(self.joint)
-            self.node.spin_for(quiet)
-            if len(self.joint) == n:
-                return
-        raise AssertionError(f'{self.ns}/joint_states still arriving after {timeout:g} s')
+        drain(self.node, self.joint, quiet, timeout, f'{self.ns}/joint_states')
 
 
 def stamp_published_after(node, sourced, wall, timeout=10.0):
