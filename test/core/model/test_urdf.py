@@ -267,7 +267,8 @@ def test_the_urdfs_tip_is_tip_position_over_a_spin_up(ros_processes, ros_node, r
     ros_node.spin_until(lambda: len(joints) > 5, 20, 'joint_states')
     omega_publisher(ros_node, ns).publish(Float64(data=2.0))   # a 4 s ramp at 0.5 rad/s^2
     ros_node.spin_until(lambda: joints[-1][0].velocity[0] == 2.0, 30, 'w = 2 rad/s')
-    ros_node.spin_until(lambda: stamp(joints[-1][0]) > stamp(joints[0][0]) + 7.0, 30, '7 s')
+    at_speed = stamp(joints[-1][0])     # then 4 rad turned: 3 s more at 2 rad/s is 10 rad
+    ros_node.spin_until(lambda: stamp(joints[-1][0]) > at_speed + 3.0, 30, '3 s at speed')
 
     graph = dict(ros_node.node.get_topic_names_and_types())
     for topic, msgtype in interface.TOPICS.items():
