@@ -42,18 +42,24 @@ No estimate (NaN, and why in ``WhirlEstimate.reason``) when the window has too f
 samples or a gap longer than ``max_gap`` of it, when a whirl is not detected above
 the noise (``detection_db``, over the whole window) or is at the float round-off of
 the offset, when its frequency is outside min_cycles / window .. max_frequency, when
-it decays or grows by more than ``max_decay`` nepers over the window, or when its
+it decays or grows by more than ``max_decay`` nepers over the window, when its
 frequency's standard deviation exceeds ``max_relative_std`` of it (the standard
 deviation from the residual, inflated by (1 + rho) / (1 - rho) for the residual's
-lag-1 correlation rho, so that a misfit does not pass for white noise).
+lag-1 correlation rho, so that a misfit does not pass for white noise), or when the
+window is not stationary for it: fitted again over each half of the window (from the
+whole's poles), the mean of its two frequencies differs from the whole's by more than
+``max_split_change`` of it and by more than 3 standard deviations of that mean for a
+white residual. (A frequency that drifts linearly, as in a spin-up, has the mean of
+the halves at the whole's value; a new vibration started inside the window does not.
+A whirl too slow for a half window, which the drift takes there, is not judged.)
 Non-finite values, unequal lengths and times that do not increase strictly raise
 ValueError.
 
 Limitation: the model is stationary. A window that contains a sudden change of the
 drive (a joint of the Eq. 26 profile, where the third derivative of w jumps and
-excites a new free vibration) does not fit it; the decay and (inflated) standard
-deviation rules reject most such windows; the rest stay within about 2 % on the
-Eq. 26 run (measured in the bench).
+excites a new free vibration, or a correction of a streamed w) does not fit it; the
+decay, (inflated) standard deviation and split-window rules reject most such windows
+(the bench measures the rest on the Eq. 26 joints).
 """
 
 from __future__ import annotations
@@ -76,6 +82,8 @@ _MAX_ITERATIONS = 30
 _START_ITERATIONS = 4       # for the first whirl alone: a start value, the other unmodelled
 _DRIFT_SIGNIFICANCE = 25.0  # (|c| / std c)^2 above which a drift term is kept
 _ZERO_PAD = 8               # periodogram length: this many times the number of blocks
+_SPLIT_SIGMAS = 3.0         # a halves' change within this many std is noise (_split_check)
+_SPLIT_TOLERANCE = 1e-5     # rad over a half window: a half's fit to ~1e-5 / (pi f T)
 MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (docs/realtime.md)
 
 
@@ -100,6 +108,14 @@ class WhirlSettings:
             guard against a window that is not stationary (a jump in the drive
             inside it shows as a whirl that grows or decays).
         max_gap: longest accepted interval between samples, fraction of the window.
+        max_split_change: largest accepted difference between a whirl's frequency
+            over the window and the mean of its frequencies over the window's two
+            halves, as a fraction of the frequency (inf: no check). The stationarity
+            check: a whirl steady over the window, or whose frequency drifts linearly
+            (a spin-up), has the mean of the halves at the whole's value; a new free
+            vibration started inside the window (a step or kink of the drive, or a
+            correction of a streamed w) puts them apart, often by far more than the
+            frequency's standard deviation, which does not see such a misfit.
     """
 
     drift_degree: int = 4
@@ -109,6 +125,7 @@ class WhirlSettings:
     max_relative_std: float = 0.002
     max_decay: float = 1.0
     max_gap: float = 0.1
+    max_split_change: float = 0.01
 
     def __post_init__(self):
         deg = self.drift_degree
@@ -120,6 +137,12 @@ class WhirlSettings:
                      'max_gap'):
             set_(self, name, finite_number(f'WhirlSettings.{name}', getattr(self, name),
                                            positive=True))
+        split = self.max_split_change
+        if not (isinstance(split, (int, float, np.floating)) and not isinstance(split, bool)
+                and split > 0):           # NaN fails too
+            raise ValueError('WhirlSettings.max_split_change must be a positive number or '
+                             f'inf, got {split!r}')
+        set_(self, 'max_split_change', float(split))
         set_(self, 'detection_db', finite_number('WhirlSettings.detection_db',
                                                  self.detection_db))
         if not math.isfinite(self.block_interval):
@@ -598,13 +621,75 @@ def _estimate_unit(t, z, cfg: WhirlSettings, start=None):
     if start:
         warm, lost, poles = _fitted_estimate(data, cfg, window, start, common)
         if not lost:
-            return warm, poles
+            return _split_check(t, z, cfg, per_block, warm, poles), poles
     grid = _Grid(data.grid, data.grid_tau, cfg.drift_degree)
     poles = _start_values(grid, data.interval, cfg, window)
     if not poles:
         return _no_estimate('no frequency in the band', **common)
     estimate, _, poles = _fitted_estimate(data, cfg, window, poles, common)
-    return estimate, poles
+    return _split_check(t, z, cfg, per_block, estimate, poles), poles
+
+
+def _half_whirls(t, z, cfg, per_block, poles):
+    """{'forward'/'backward': (frequency, its white-noise std), Hz} over (t, z).
+
+    The whole window's procedure (all drift terms, then the significant ones) from the
+    whole window's poles. A whirl not detected above the noise is left out, and so is
+    a sign with two poles; nothing when the samples make fewer than ``min_blocks``
+    blocks. The standard deviation is the one for a white residual (not inflated):
+    the spread of the frequency if the model fits.
+    """
+    if len(t) // per_block < cfg.min_blocks:
+        return {}
+    data = _Blocks(t, z, per_block, cfg.drift_degree)
+    if data.m < cfg.min_blocks:
+        return {}
+    window = 2.0 * data.half_span
+    fit = _fit(data, poles, cfg.drift_degree, window, tolerance=_SPLIT_TOLERANCE)
+    degree = _drift_degree(fit)
+    if degree < cfg.drift_degree:
+        fit = _fit(data, fit.s, degree, window, tolerance=_SPLIT_TOLERANCE)
+    whirls = _whirls(fit, data, cfg, window)
+    names = [name for name, *_ in whirls]
+    return {name: (abs(pole.imag) / TWO_PI, whirl.frequency_std / math.sqrt(fit.inflation))
+            for name, whirl, kind, _, pole in whirls
+            if kind != 'noise' and names.count(name) == 1}
+
+
+def _split_check(t, z, cfg, per_block, estimate, poles):
+    """``estimate`` without the whirls whose halves of the window disagree with the whole.
+
+    A whirl is rejected when the mean of its frequencies over the two halves differs
+    from its frequency over the whole by more than ``cfg.max_split_change`` of it and
+    by more than ``_SPLIT_SIGMAS`` standard deviations of that mean for a white
+    residual: a difference that matters and that noise does not explain (a slow whirl
+    that the drift takes over a half window has a large standard deviation there, and
+    is not judged on it). Whirls a half does not detect, and windows too short to fit
+    the model over each half (fewer than ``min_blocks`` blocks), are not checked.
+    """
+    accepted = [name for name in ('forward', 'backward')
+                if not math.isnan(getattr(estimate, name).frequency)]
+    if not accepted or math.isinf(cfg.max_split_change):
+        return estimate
+    poles = np.asarray(poles, dtype=complex)
+    half = len(t) // 2
+    first = _half_whirls(t[:half], z[:half], cfg, per_block, poles)
+    second = _half_whirls(t[half:], z[half:], cfg, per_block, poles)
+    changes, reasons = {}, [estimate.reason] if estimate.reason else []
+    for name in accepted:
+        if name not in first or name not in second:    # a half cannot judge it
+            continue
+        whirl = getattr(estimate, name)
+        (f_a, std_a), (f_b, std_b) = first[name], second[name]
+        change = abs(0.5 * (f_a + f_b) - whirl.frequency)
+        noise = _SPLIT_SIGMAS * 0.5 * math.hypot(std_a, std_b)
+        if not change <= max(cfg.max_split_change * whirl.frequency, noise):
+            changes[name] = dataclasses.replace(whirl, frequency=math.nan)
+            reasons.append(f'{name}: not stationary over the window (its halves give '
+                           f'{f_a:.4g} and {f_b:.4g} Hz, the whole {whirl.frequency:.4g} Hz)')
+    if not changes:
+        return estimate
+    return dataclasses.replace(estimate, reason='; '.join(reasons), **changes)
 
 
 def _fitted_estimate(data, cfg, window, poles, common):

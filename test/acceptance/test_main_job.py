@@ -68,18 +68,15 @@ def test_the_main_job_end_to_end(tmp_path):
     given = np.isfinite(fe[spin_up])
     # NaN where a window is not stationary: the spin-up's own whirls are ~0.1 um, and
     # small corrections of the streamed w (delivery hiccups) start new ones
-    # (26-65 % measured across runs of the same code, depending on the stream's hiccups)
+    # (how many depends on the stream's hiccups: the fraction is printed)
     print(f"estimates given in {given.mean():.0%} of the spin-up windows")
     assert given.mean() >= 0.2, given.mean()
-    # Such a correction inside a window (a step in the whirls' amplitude and phase) is
-    # not in the estimator's model of steady whirls; its frequency std does not see
-    # the misfit, and a window of the first seconds, where the spin-up's own whirls are
-    # 5e-8 m under a quasi-static deflection a thousand times larger, was once published
-    # 2.9 % off (1 of 120). So: nearly every estimate within 2 %, none beyond 5 %.
+    # Such a correction inside a window is not in the estimator's model of steady
+    # whirls: its split-window check drops the whirls it moves (a window was once
+    # published 2.9 % off, before the check; test_whirl.py keeps 14 such windows)
     error = np.abs(fe[spin_up][given] / model[given] - 1)
-    print(f'error of the estimates: median {np.median(error):.2%}, max {error.max():.2%}, '
-          f'{np.mean(error <= 0.02):.1%} within 2 %')
-    assert np.mean(error <= 0.02) >= 0.97 and error.max() <= 0.05
+    print(f'error of the estimates: median {np.median(error):.2%}, max {error.max():.2%}')
+    assert error.max() <= 0.02
 
 
 def test_demo_is_a_module_too():

@@ -17,6 +17,7 @@ so std(f_hat) >= sqrt(6 sigma^2 / (A^2 N (N^2 - 1))) / (2 pi dt) Hz. SNR = A^2 /
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -230,6 +231,48 @@ def test_online_estimate_equals_the_batch_estimate_of_its_window():
     assert online.f2 == pytest.approx(batch.f2, rel=1e-7)
 
 
+LIVE_WINDOWS = Path(__file__).parent / 'data' / 'live_windows_off_eq28.csv'
+
+
+def test_live_windows_with_a_new_vibration_inside_are_not_stationary():
+    """14 one-second windows of motion the simulator published in ``rotrod demo`` runs,
+    in which the estimate without the stationarity check was over 1 % off Eq. 28 (one
+    2.24 %, issue 6 asks 2 %): small corrections of the streamed w start whirls of
+    1e-8 m beside the spin-up's 5e-8 m ones. The check rejects most of those whirls;
+    every estimate it leaves is within 2 %."""
+    data = np.loadtxt(LIVE_WINDOWS, delimiter=',', comments='#', skiprows=5)
+    unchecked, rejected, given = [], 0, []
+    for k in np.unique(data[:, 0]):
+        t, u, v, w = data[data[:, 0] == k, 1:].T
+        f = eq28(w[0])
+        before = estimate_whirl(t, u, v, WhirlSettings(max_split_change=math.inf))
+        unchecked.append(np.nanmax(relative_errors((before.f1, before.f2), w[0])))
+        est = estimate_whirl(t, u, v)
+        rejected += est.reason.count('not stationary')
+        for name, value, model in (('forward', est.f1, f[0]), ('backward', est.f2, f[1])):
+            if not math.isnan(value):
+                given.append(abs(value / model - 1))
+            else:
+                assert name in est.reason
+    assert len(unchecked) == 14 and min(unchecked) > 0.01 and max(unchecked) > 0.02
+    assert rejected >= 12
+    assert given and max(given) <= 0.02
+
+
+def test_a_steady_window_passes_the_stationarity_check_unchanged():
+    """Two steady whirls at 40 dB, one slow (0.97 Hz: half a cycle per half window,
+    which the drift takes there, so a half does not judge it): the same estimate with
+    and without the check."""
+    rng = np.random.default_rng(7)
+    for w in (0.0, 2.0, 0.5 * W0):
+        f1, f2 = eq28(w)
+        z = (2.8e-3 + 1e-3 * np.exp(2j * math.pi * f1 * T) + 1e-3 * np.exp(-2j * math.pi * f2 * T)
+             + complex_noise(rng, 1e-10))
+        checked = estimate_whirl(T, z.real, z.imag)
+        unchecked = estimate_whirl(T, z.real, z.imag, WhirlSettings(max_split_change=math.inf))
+        assert checked == unchecked and not math.isnan(checked.f1 + checked.f2), w
+
+
 # -- no estimate -------------------------------------------------------------------------
 
 def test_no_motion_and_a_pure_static_offset_give_no_estimate():
@@ -318,6 +361,9 @@ def test_unusable_input_is_refused():
         WhirlSettings(drift_degree=-1)
     with pytest.raises(ValueError, match='max_frequency'):
         WhirlSettings(max_frequency=0.0)
+    for bad in (0.0, -0.01, math.nan, True, '0.01', None):
+        with pytest.raises(ValueError, match='max_split_change'):
+            WhirlSettings(max_split_change=bad)
 
 
 def test_online_estimator_before_the_window_fills_and_on_bad_samples():
@@ -537,7 +583,7 @@ def test_whirl_estimator_push_refuses_bad_samples_and_keeps_its_state(samples):
 @props(150)
 @given(st.dictionaries(st.sampled_from(['drift_degree', 'max_frequency', 'min_cycles',
                                         'detection_db', 'max_relative_std', 'max_decay',
-                                        'max_gap']),
+                                        'max_gap', 'max_split_change']),
                        anything(st.floats(0.05, 50.0)), max_size=3),
        anything(st.floats(0.05, 5.0)), anything(st.floats(1e-4, 0.01)),
        anything(st.floats(0.0, 0.5)))
