@@ -144,12 +144,7 @@ def _run_chunk(co, n, t, profile, torque, coupling, init, record_every):
 
 def flat_coefficients(params: RodParams) -> Coefficients:
     """The Coefficients of every system of ``params``, each field an array (n,)."""
-    shape = params.shape
-    n = int(np.prod(shape)) if shape else 1
-    co = Coefficients.from_params(params)
-    return Coefficients(**{k: (np.broadcast_to(np.asarray(v, float), shape).ravel().copy()
-                               if shape else np.full(n, float(v)))
-                           for k, v in vars(co).items()})
+    return velocity.as_arrays(Coefficients.from_params(params), params.shape)
 
 
 def _flat_batch(params: RodParams, initial: dict | None):

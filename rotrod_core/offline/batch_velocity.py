@@ -62,11 +62,17 @@ def system_kinds(co: Coefficients) -> np.ndarray:
     return np.where(iso & (g1 == 0), 0, np.where(iso, 1, 2)).astype(int)
 
 
-def as_arrays(co: Coefficients) -> Coefficients:
-    """``co`` with every field an array of the batch's length (scalars broadcast)."""
-    n = max(np.size(v) for v in vars(co).values())
-    return Coefficients(**{k: np.broadcast_to(np.asarray(v, float), (n,)).copy()
-                           for k, v in vars(co).items()})
+def as_arrays(co: Coefficients, shape: tuple | None = None) -> Coefficients:
+    """``co`` with every field a flat array (n,), one value per system.
+
+    The fields are broadcast together, or to ``shape`` (the batch's shape; () is
+    one system), then flattened.
+    """
+    values = {k: np.asarray(v, float) for k, v in vars(co).items()}
+    if shape is None:
+        shape = np.broadcast_shapes(*(v.shape for v in values.values()))
+    return Coefficients(**{k: np.broadcast_to(v, shape).ravel().copy()
+                           for k, v in values.items()})
 
 
 def subset(co: Coefficients, idx) -> Coefficients:
