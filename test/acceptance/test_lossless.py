@@ -53,9 +53,9 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
     time.sleep(1.0)
     logger.signal_group(signal.SIGCONT)
     time.sleep(2.0)
+    wall = time.monotonic() - t0             # to the signal: t_end is simulated time then
     sim.signal_group(signal.SIGINT)
     assert sim.wait(timeout=30) == 0
-    wall = time.monotonic() - t0
     done = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications',
                      sim.output)
     t_end, published = float(done.group(1)), int(done.group(2))
