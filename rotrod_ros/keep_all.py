@@ -27,15 +27,21 @@ class KeepAllPublishing:
         publishers: the node's publishers by topic name.
         logger: the node's logger.
         ok: whether the node's context is up (an error while it shuts down is raised).
-        running: whether the publisher's source is still running (a wait ends when not).
+        running: whether the publisher's source is still running. Once it is not, waits
+            go on for ``stop_grace`` wall seconds in all, so that the sample being
+            published when the source is stopped is published whole, then end.
+        stop_grace: see ``running``, s.
     """
 
     def __init__(self, publishers: Mapping[str, Publisher], logger: RcutilsLogger,
-                 ok: Callable[[], bool], running: Callable[[], bool]) -> None:
+                 ok: Callable[[], bool], running: Callable[[], bool],
+                 stop_grace: float = 0.0) -> None:
         self._publishers = publishers
         self._logger = logger
         self._ok = ok
         self._running = running
+        self._stop_grace = stop_grace
+        self._stop_deadline: float | None = None
         self.held_up = 0
         """Publications a KEEP_ALL subscriber held up (rmw blocked them, then failed)."""
         self.dropped = 0
@@ -45,8 +51,9 @@ class KeepAllPublishing:
     def send(self, name: str, msg: Any, wait: bool) -> None:
         """Publish ``msg`` on ``name``; if a KEEP_ALL subscriber holds it up, wait or drop.
 
-        ``wait``: publish again until it goes through (while the context is up and the
-        source runs); otherwise the publication is dropped and counted.
+        ``wait``: publish again until it goes through (while the context is up, and the
+        source runs or was stopped less than ``stop_grace`` ago); otherwise the
+        publication is dropped and counted.
         """
         publisher = self._publishers[name]
         try:
@@ -56,7 +63,7 @@ class KeepAllPublishing:
             if not self._ok():
                 raise
         self.held_up += 1
-        while wait and self._ok() and self._running():
+        while wait and self._ok() and self._may_wait():
             self._logger.info(f'{name}: a KEEP_ALL subscriber is behind; waiting for it',
                               throttle_duration_sec=5.0)
             try:
@@ -68,6 +75,14 @@ class KeepAllPublishing:
         self._logger.warning(f'{name}: a KEEP_ALL subscriber is behind: '
                              f'{self.dropped} publications dropped so far',
                              throttle_duration_sec=1.0)
+
+    def _may_wait(self) -> bool:
+        """Whether the source runs, or was stopped less than ``stop_grace`` s ago."""
+        if self._running():
+            return True
+        if self._stop_deadline is None:
+            self._stop_deadline = time.monotonic() + self._stop_grace
+        return time.monotonic() < self._stop_deadline
 
     def flush(self, names: Iterable[str], timeout: float) -> None:
         """Wait for the subscribers of ``names`` to acknowledge every publication.

@@ -45,6 +45,10 @@ NODE_NAME = 'rotrod_simulator'
 FLUSH_TIMEOUT = 10.0
 """Wall seconds a lossless simulator waits at its end for its subscribers to
 acknowledge what it published (rmw sends acknowledgement requests periodically)."""
+STOP_GRACE = 2.0
+"""Wall seconds a lossless simulator stopped while a subscriber holds a publication up
+goes on trying, so that its last sample is published on every topic (within the 5 s
+the stop waits for the physics thread)."""
 COMMAND_QOS_DEPTH = PENDING_COMMANDS
 """Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
 must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
@@ -130,8 +134,9 @@ class SimulatorNode(Node):
             '~/reset': self._on_reset, '~/pause': self._on_pause},
             conditions={LOSSLESS} if self.lossless else ())
         # paced, a held-up publication is dropped; as fast as possible, the physics waits
+        # (and on a stop, finishes publishing its sample: up to STOP_GRACE)
         self._keep_all = KeepAllPublishing(self._io, self.get_logger(), self.context.ok,
-                                           lambda: self.loop.running)
+                                           lambda: self.loop.running, STOP_GRACE)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
