@@ -65,8 +65,10 @@ def test_the_grace_after_a_stop_is_bounded():
     sent = publishing(publisher, running=lambda: False, stop_grace=0.2)
     start = time.monotonic()
     sent.send('joint_states', 'x', wait=True)
+    first = time.monotonic() - start
     sent.send('joint_states', 'y', wait=True)          # the grace is spent: at once
-    assert time.monotonic() - start == pytest.approx(0.2, abs=0.15)
+    second = time.monotonic() - start - first
+    assert 0.2 <= first < 2.0 and second < 0.5, (first, second)
     assert publisher.sent == [] and (sent.held_up, sent.dropped) == (2, 2)
 
 
