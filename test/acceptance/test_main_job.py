@@ -72,8 +72,9 @@ def test_the_main_job_end_to_end(tmp_path):
     print(f"estimates given in {given.mean():.0%} of the spin-up windows")
     assert given.mean() >= 0.2, given.mean()
     # Such a correction inside a window is not in the estimator's model of steady
-    # whirls: its split-window check drops the whirls it moves (a window was once
-    # published 2.9 % off, before the check; test_whirl.py keeps 14 such windows)
+    # whirls: its split-window check and its misfit rule for a pair drop the whirls it
+    # moves (a window was once published 2.9 % off, before them; test_whirl.py keeps
+    # 37 such windows)
     error = np.abs(fe[spin_up][given] / model[given] - 1)
     print(f'error of the estimates: median {np.median(error):.2%}, max {error.max():.2%}')
     assert error.max() <= 0.02
