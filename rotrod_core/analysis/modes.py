@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import rotrod_core.model.equations as model
+import rotrod_core.model.propagation as propagation
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import finite_array
@@ -115,7 +115,7 @@ class ModalAnalysis:
 def state_matrix(params: RodParams, omega: float) -> np.ndarray:
     """4x4 matrix of the free (homogeneous) deflection dynamics at constant ``omega``."""
     co = Coefficients.from_params(params)
-    return model.rotating_frame_matrix(co, omega, 0.0)[:4, :4]
+    return propagation.system_matrix(co, omega, 0.0)[:4, :4]
 
 
 def modal_analysis(params: RodParams, omega: float) -> ModalAnalysis:

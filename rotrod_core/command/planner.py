@@ -28,14 +28,13 @@ import numpy as np
 from scipy.interpolate import BSpline
 from scipy.optimize import lsq_linear, minimize
 
+import rotrod_core.model.propagation as propagation
 from rotrod_core.command.profiles import SpinUpProfile, spin_up_knots
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import finite_number
 from rotrod_core.numerics.expm import expm_batch
 
-_GAUSS = math.sqrt(3.0) / 6.0
-_C3 = math.sqrt(3.0) / 12.0
 STEPS_PER_KNOT = 6
 """Magnus steps per knot interval while optimising (4x more for the final check)."""
 MAX_STEPS_PER_KNOT = 24
@@ -85,63 +84,45 @@ is still above 1.5x the aim and less than 20 % below the best before them."""
 class _Sample:
     """One system of the band: coefficients, start state, target state, residual rows."""
 
-    co: dict
+    co: Coefficients
     start: np.ndarray       # (u, v, u', v', 1) at omega_start, at rest about its static
     target: np.ndarray      # (u, v, u', v') static at omega_target
     rows: np.ndarray        # complex (n, 4): residual = sum |rows @ (x - target)|
 
 
-def _coefficients(params: RodParams, scale: float) -> dict:
-    """Per-unit-mass coefficients, natural frequencies scaled by ``scale``.
+def _coefficients(params: RodParams, scale: float) -> Coefficients:
+    """The equations' coefficients with the natural frequencies scaled by ``scale``.
 
     The stiffness scales by scale^2, as a change of Young's modulus would.
     """
-    co = Coefficients.from_params(params.replace(youngs_modulus=params.youngs_modulus
-                                                 * scale * scale))
-    return {'w1sq': co.w1sq, 'w2sq': co.w2sq, 'g1': co.g1, 'g2': co.g2,
-            'r0': co.eccentricity}
+    return Coefficients.from_params(params.replace(youngs_modulus=params.youngs_modulus
+                                                   * scale * scale))
 
 
-def _matrix(co: dict, w, wd) -> np.ndarray:
-    """Augmented 5x5 matrices of (u, v, u', v', 1)' at speeds ``w``, accelerations ``wd``.
+_STACKED: dict = {}
 
-    The equations of rotrod_core.model.equations, written out here for their derivatives.
+
+def _stacked(samples) -> tuple[Coefficients, tuple]:
+    """The samples' coefficients as arrays of shape (B, 1), and their derivative parts.
+
+    One row per sample; the parts are :func:`~rotrod_core.model.propagation.derivative_parts`
+    (kept for the last few sets of samples).
     """
-    w = np.asarray(w, dtype=float)
-    A = np.zeros(np.broadcast_shapes(w.shape, np.shape(co['w1sq'])) + (5, 5))
-    w2 = w * w
-    A[..., 0, 2] = A[..., 1, 3] = 1.0
-    A[..., 2, 0] = w2 - co['w1sq']
-    A[..., 2, 1] = wd
-    A[..., 2, 2] = -co['g1']
-    A[..., 2, 3] = 2 * w
-    A[..., 2, 4] = w2 * co['r0']
-    A[..., 3, 0] = -wd
-    A[..., 3, 1] = w2 - co['w2sq']
-    A[..., 3, 2] = -2 * w
-    A[..., 3, 3] = -co['g2']
-    A[..., 3, 4] = -wd * co['r0']
-    return A
+    key = tuple(id(s) for s in samples)
+    found = _STACKED.get(key)
+    if found is None or len(found[0]) != len(samples) or not all(
+            a is b for a, b in zip(found[0], samples)):     # the cache holds them: ids unique
+        co = Coefficients(**{k: np.array([float(getattr(s.co, k)) for s in samples])[:, None]
+                             for k in vars(samples[0].co)})
+        if len(_STACKED) > 16:
+            _STACKED.pop(next(iter(_STACKED)))
+        found = _STACKED[key] = (list(samples), co, propagation.derivative_parts(co))
+    return found[1], found[2]
 
 
-def _d_speed(co: dict, w) -> np.ndarray:
-    """d(matrix)/dw."""
-    w = np.asarray(w, dtype=float)
-    D = np.zeros(np.broadcast_shapes(w.shape, np.shape(co['w1sq'])) + (5, 5))
-    D[..., 2, 0] = D[..., 3, 1] = 2 * w
-    D[..., 2, 3] = 2.0
-    D[..., 2, 4] = 2 * w * co['r0']
-    D[..., 3, 2] = -2.0
-    return D
-
-
-def _d_acceleration(co: dict, shape) -> np.ndarray:
-    """d(matrix)/dw'."""
-    D = np.zeros(np.broadcast_shapes(shape, np.shape(co['w1sq'])) + (5, 5))
-    D[..., 2, 1] = 1.0
-    D[..., 3, 0] = -1.0
-    D[..., 3, 4] = -co['r0']
-    return D
+def _free_matrix(co: Coefficients, omega: float) -> np.ndarray:
+    """The 5x5 system at a constant speed ``omega`` (rad/s), from the kernel."""
+    return propagation.system_matrix(co, omega, 0.0)
 
 
 def _sample(params: RodParams, scale: float, omega_start: float,
@@ -149,7 +130,7 @@ def _sample(params: RodParams, scale: float, omega_start: float,
     co = _coefficients(params, scale)
     states = []
     for w in (omega_start, omega_target):
-        A = _matrix(co, w, 0.0)
+        A = _free_matrix(co, w)
         lam = np.linalg.eigvals(A[:4, :4])
         if np.max(lam.real) > 1e-9 * np.max(np.abs(lam)):
             raise ValueError(f'the rod is unstable at a constant {w:g} rad/s (natural '
@@ -159,7 +140,7 @@ def _sample(params: RodParams, scale: float, omega_start: float,
     return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target))
 
 
-def _residual_rows(co: dict, omega: float) -> np.ndarray:
+def _residual_rows(co: Coefficients, omega: float) -> np.ndarray:
     """Rows R (complex, n x 4) with: free-whirl amplitude = sum |R @ (x - x_static)|.
 
     At constant w a free motion is x(t) = sum_i q_i phi_i exp(lambda_i t), q = V^-1 x.
@@ -169,7 +150,7 @@ def _residual_rows(co: dict, omega: float) -> np.ndarray:
     semi-major axis (the whirl's amplitude) is |a+| + |a-|. A real eigenvalue moves it
     along a line, amplitude |q| |(phi_u, phi_v)|.
     """
-    lam, V = np.linalg.eig(_matrix(co, omega, 0.0)[:4, :4])
+    lam, V = np.linalg.eig(_free_matrix(co, omega)[:4, :4])
     W = np.linalg.inv(V)
     scale = np.max(np.abs(lam))
     rows = []
@@ -208,7 +189,7 @@ def fitted_whirl_residual(params: RodParams, omega: float, t, u, v) -> tuple[flo
               - s.target[1]]
     if t.size < 4 or z.size != 2 * t.size or not np.all(np.isfinite(z)):
         raise ValueError('fitted_whirl_residual needs >= 4 finite samples of t, u and v')
-    lam, V = np.linalg.eig(_matrix(s.co, omega, 0.0)[:4, :4])
+    lam, V = np.linalg.eig(_free_matrix(s.co, omega)[:4, :4])
     W = np.linalg.inv(V)
     grow = np.exp(np.outer(t - t[0], lam))                   # (n, 4)
     design = np.r_[((V[0] * grow) @ W).real, ((V[1] * grow) @ W).real]
@@ -228,7 +209,8 @@ class _Grid:
     def __init__(self, n_free: int, steps_per_knot: int):
         self.n = (n_free + 1) * steps_per_knot
         x0 = np.arange(self.n) / self.n
-        self.x1, self.x2 = x0 + (0.5 - _GAUSS) / self.n, x0 + (0.5 + _GAUSS) / self.n
+        g1, g2 = propagation.GAUSS2
+        self.x1, self.x2 = x0 + g1 / self.n, x0 + g2 / self.n
         self.w1, self.d1 = _basis(n_free, self.x1)
         self.w2, self.d2 = _basis(n_free, self.x2)
 
@@ -237,52 +219,36 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
     """States on the grid nodes for every sample, shape (B, N + 1, 5).
 
     With ``free``, also their derivatives with respect to those control points and
-    to T, shape (B, N + 1, 5, len(free) + 1).
+    to T, shape (B, N + 1, 5, len(free) + 1). The system, its Magnus exponent, their
+    derivatives and the chains are the kernel's (:mod:`rotrod_core.model.propagation`).
     """
-    co = {k: np.array([s.co[k] for s in samples])[:, None] for k in samples[0].co}
+    co, parts = _stacked(samples)
     h = T / grid.n
     w1, wd1 = grid.w1 @ c, grid.d1 @ c / T
     w2, wd2 = grid.w2 @ c, grid.d2 @ c / T
-    A1, A2 = _matrix(co, w1, wd1), _matrix(co, w2, wd2)
-    k = _C3 * h * h
-    comm = A2 @ A1 - A1 @ A2
-    omega = 0.5 * h * (A1 + A2) + k * comm
+    A1 = propagation.system_matrix(co, w1, wd1)
+    A2 = propagation.system_matrix(co, w2, wd2)
+    omega = propagation.magnus4(h, A1, A2)
     half = expm_batch(0.5 * omega)
     phi = half @ half
-    B = len(samples)
-    X = np.empty((B, grid.n + 1, 5))
-    X[:, 0] = [s.start for s in samples]
-    x = X[:, 0, :, None]
-    for j in range(grid.n):
-        x = phi[:, j] @ x
-        X[:, j + 1] = x[..., 0]
+    X = propagation.affine_chain(phi, np.array([s.start for s in samples]))
     if free is None:
         return X, None
     # d(Omega)/dp for p = w(t1), w'(t1), w(t2), w'(t2), and T at fixed speeds
-    dw1, dw2 = _d_speed(co, w1), _d_speed(co, w2)
-    da1, da2 = _d_acceleration(co, w1.shape), _d_acceleration(co, w2.shape)
-    E = np.stack([0.5 * h * dw1 + k * (A2 @ dw1 - dw1 @ A2),
-                  0.5 * h * da1 + k * (A2 @ da1 - da1 @ A2),
-                  0.5 * h * dw2 + k * (dw2 @ A1 - A1 @ dw2),
-                  0.5 * h * da2 + k * (da2 @ A1 - A1 @ da2),
-                  (0.5 * h * (A1 + A2) + 2 * k * comm) / T])
-    # Frechet derivative of exp along E applied to x_j, by Simpson's rule on
-    # integral_0^1 exp(s Omega) E exp((1 - s) Omega) ds (error ~ |Omega|^4 / 2880)
-    xj, xn = X[:, :-1], X[:, 1:]
-    mid = np.einsum('bnij,bnj->bni', half, xj)
-    dx = (np.einsum('bnij,pbnj->pbni', phi, np.einsum('pbnij,bnj->pbni', E, xj))
-          + 4 * np.einsum('bnij,pbnj->pbni', half, np.einsum('pbnij,bnj->pbni', E, mid))
-          + np.einsum('pbnij,bnj->pbni', E, xn)) / 6
+    dw1, da1 = propagation.system_matrix_derivatives(co, w1, wd1, parts)
+    dw2, da2 = propagation.system_matrix_derivatives(co, w2, wd2, parts)
+    E = np.stack([propagation.magnus4_derivative(h, A1, A2, dw1, 0.0),
+                  propagation.magnus4_derivative(h, A1, A2, da1, 0.0),
+                  propagation.magnus4_derivative(h, A1, A2, 0.0, dw2),
+                  propagation.magnus4_derivative(h, A1, A2, 0.0, da2),
+                  propagation.magnus4_step_derivative(h, A1, A2) * (h / T)])
+    dx = propagation.frechet_simpson(half, phi, E, X[:, :-1], X[:, 1:])
     z = np.zeros((grid.n, 1))
     dp = np.stack([np.c_[grid.w1[:, free], z], np.c_[grid.d1[:, free] / T, -wd1[:, None] / T],
                    np.c_[grid.w2[:, free], z], np.c_[grid.d2[:, free] / T, -wd2[:, None] / T],
                    np.c_[np.zeros((grid.n, len(free))), z + 1]])
     D = np.einsum('pbni,pnk->bnik', dx, dp)
-    S = np.empty((B, grid.n + 1, 5, D.shape[-1]))
-    S[:, 0] = 0.0
-    for j in range(grid.n):
-        S[:, j + 1] = phi[:, j] @ S[:, j] + D[:, j]
-    return X, S
+    return X, propagation.sensitivity_chain(phi, D)
 
 
 def _residuals(samples, X, S=None, parts=False):

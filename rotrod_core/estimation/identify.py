@@ -22,11 +22,13 @@ motion, with w varying or constant. Two stages (docs/identification.md):
    deflection and rate z(t0), z'(t0) (complex). The model output is linear in
    (z(t0), z'(t0), r0), so these are solved exactly for every trial (a, g) (variable
    projection) and Gauss-Newton (Levenberg-Marquardt) runs over (a, g) only. The
-   simulation is the rotating-frame equation on the sample grid: a fourth-order
-   Magnus step (two Gauss points, w and w' there from a cubic Hermite interpolation of
-   the samples), its exponential in closed form (Cayley-Hamilton for the 2x2 complex
-   matrix), with the forward sensitivities to a and g carried along in the same step
-   matrices, chained by blocked products (vectorized).
+   simulation is the rotating-frame equation on the sample grid, by the one
+   propagation kernel (:mod:`rotrod_core.model.propagation`, shared with simulate,
+   simulate_batch and the planner): its isotropic system and fourth-order Magnus
+   step (two Gauss points, w and w' there from a cubic Hermite interpolation of
+   the samples), the step's exponential in closed form (Cayley-Hamilton for the 2x2
+   complex matrix), with the forward sensitivities to a and g carried along in the
+   same step matrices, chained by the kernel's blocked products (vectorized).
 
 For white measurement noise on u and v this is the maximum-likelihood estimate: its
 covariance sigma^2 (J^T J)^-1 (J: the Jacobian of the real and imaginary parts of the
@@ -58,12 +60,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+import rotrod_core.model.propagation as propagation
 from rotrod_core.analysis.critical import STARTS, critical_speed_from
+from rotrod_core.model.equations import Coefficients
 from rotrod_core.numerics.checks import finite_array, finite_number
 
 MIN_SAMPLES = 20            # fewest samples identify_rig accepts
-_GAUSS = math.sqrt(3.0) / 6.0
-_MAGNUS_C = math.sqrt(3.0) / 12.0
 _TERM_TOLERANCE = 1e-18     # Taylor terms of the step exponential summed to this size
 _SINGULAR = 1e-8            # singular value / largest (unit columns): structurally singular
 _MAX_ITERATIONS = 50
@@ -187,11 +189,15 @@ class _Record:
     slopes: np.ndarray
 
     def __post_init__(self):
-        # kappa - a = -w^2 + i w' and 2 i w at the Gauss points (the forcing is -(kappa - a))
-        self.k1 = -self.w1**2 + 1j * self.wd1
-        self.k2 = -self.w2**2 + 1j * self.wd2
-        self.i2w1 = 2j * self.w1
-        self.i2w2 = 2j * self.w2
+        # the kernel's isotropic system at the Gauss points for w0^2 = g = 0 and a unit
+        # load radius (the forcing per metre of r0), and its derivatives by w0^2 and g
+        base = _unit_rod(0.0, 0.0)
+        self.X1 = propagation.complex_system(base, self.w1, self.wd1)
+        self.X2 = propagation.complex_system(base, self.w2, self.wd2)
+        self.by_a = propagation.lin((1.0, propagation.complex_system_derivative(
+            base, 'natural_frequency_squared', self.w1, self.wd1)))
+        self.by_g = propagation.lin((1.0, propagation.complex_system_derivative(
+            base, 'damping_rate', self.w1, self.wd1)))
 
     @property
     def n(self) -> int:
@@ -239,7 +245,7 @@ def _record(t, u, v, omega, omega_dot=None) -> _Record:
         slopes = wd
     h = np.diff(t)
     out = {}
-    for name, s in (('1', 0.5 - _GAUSS), ('2', 0.5 + _GAUSS)):
+    for name, s in zip(('1', '2'), propagation.GAUSS2):
         # cubic Hermite through (w, w') at the ends of each interval
         h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, \
             -2 * s**3 + 3 * s**2, s**3 - s**2
@@ -333,30 +339,43 @@ def _affine_expm(x, b, dx10, dx11, db1):
     return E, phi
 
 
+def _unit_rod(a: float, g: float) -> Coefficients:
+    """An isotropic rod with w0^2 = a (1/s^2), g = c/M = a (1/s) and load radius 1 m."""
+    return Coefficients(mass=1.0, eccentricity=1.0, hub_inertia=1.0, k1=a, k2=a, c1=g, c2=g,
+                        w1sq=a, w2sq=a, g1=g, g2=g)
+
+
+def _entries(X, n: int, which) -> list:
+    """Entries ``which`` of a complex affine tuple as arrays of n (None: zeros)."""
+    return [np.broadcast_to(0j if X[i] is None else X[i], (n,)) for i in which]
+
+
 def _step_matrices(rec: _Record, a: float, g: float, out=None) -> np.ndarray:
     """Magnus step matrices (n-1, 7, 7) of (z, z', r0, dz/da, dz'/da, dz/dg, dz'/dg).
 
-    Fourth-order Magnus on x' = [[X(t), b(t)], [0, 0]] x, x = (z, z', r0):
-    X = [[0, 1], [-kappa, -gamma]], kappa = a - w^2 + i w', gamma = g + 2 i w,
-    b = (0, w^2 - i w'). The sensitivities obey the same equation, forced by the
-    derivative of the step matrix (the Frechet derivative of its exponential).
-    Written into ``out`` (a :class:`_Workspace` buffer) when given.
+    The kernel's fourth-order Magnus exponent
+    (:func:`rotrod_core.model.propagation.magnus4_complex`) of the isotropic system
+    z'' = x10 z + x11 z' + r0 b1 on x = (z, z', r0), and its derivatives by a and g.
+    The sensitivities obey the same equation, forced by the derivative of the step
+    matrix (the Frechet derivative of its exponential). Only x10, x11 and b1 of the
+    exponent depend on a and g (z' = z' holds at both Gauss points). Written into
+    ``out`` (a :class:`~rotrod_core.model.propagation.ChainWorkspace` step buffer) when
+    given.
     """
     h = rec.h
-    c = _MAGNUS_C * h * h
-    k1 = a + rec.k1
-    k2 = a + rec.k2
-    g1, g2 = g + rec.i2w1, g + rec.i2w2
-    f1, f2 = -rec.k1, -rec.k2
-    x = (c * (k2 - k1), h + c * (g2 - g1), -0.5 * h * (k1 + k2) + c * (g2 * k1 - g1 * k2),
-         -0.5 * h * (g1 + g2) + c * (k1 - k2))
-    b = (c * (f1 - f2), 0.5 * h * (f1 + f2) + c * (g1 * f2 - g2 * f1))
     n = len(h)
-    zero = np.zeros(n)
-    dx10 = np.stack([-h + c * (g2 - g1), c * (k1 - k2)])     # d/da, d/dg
-    dx11 = np.stack([zero, -h])
-    db1 = np.stack([zero, c * (f2 - f1)])
-    E, phi = _affine_expm(x, b, dx10, dx11, db1)
+    X1 = propagation.lin((1.0, rec.X1), (a, rec.by_a), (g, rec.by_g))
+    X2 = propagation.lin((1.0, rec.X2), (a, rec.by_a), (g, rec.by_g))
+    omega = _entries(propagation.magnus4_complex(h, X1, X2), n, range(6))
+    derivatives = [propagation.magnus4_complex_derivative(h, X1, X2, d, d)
+                   for d in (rec.by_a, rec.by_g)]
+    for d in derivatives:
+        if any(np.any(e != 0) for e in _entries(d, n, (0, 1, 4))):
+            raise AssertionError('identification expects the exponent\'s first row to '
+                                 'be independent of a and g')
+    dx10, dx11, db1 = (np.stack(parts) for parts in zip(
+        *(_entries(d, n, (2, 3, 5)) for d in derivatives)))
+    E, phi = _affine_expm(omega[:4], omega[4:], dx10, dx11, db1)
     S = np.zeros((n, 7, 7), dtype=complex) if out is None else out[:n]
     S[:, 2, 2] = 1.0
     for j, row in enumerate((0, 3, 5)):
@@ -369,62 +388,22 @@ def _step_matrices(rec: _Record, a: float, g: float, out=None) -> np.ndarray:
     return S if out is None else out
 
 
-class _Workspace:
-    """Buffers of the step matrices and their products, kept between evaluations.
-
-    Fresh arrays of this size (~1 MB for 1000 samples) are mapped from the system on
-    every allocation and cost more in page faults than the arithmetic in them.
-    """
-
-    def __init__(self):
-        self.n = -1
-
-    def steps(self, n: int) -> np.ndarray:
-        """A zeroed (n padded to blocks, 7, 7) buffer; the padding is the identity."""
-        if n != self.n:
-            self.n = n
-            self.block = max(1, int(math.sqrt(n)))
-            self.blocks = -(-n // self.block)
-            size = self.blocks * self.block
-            self.S = np.zeros((size, 7, 7), dtype=complex)
-            self.S[n:] = np.eye(7)
-            self.cum = np.empty((self.blocks, self.block, 7, 7), dtype=complex)
-            self.out = np.empty((size + 1, 3, 3), dtype=complex)
-        return self.S
-
-
-def _chain(S: np.ndarray, n: int | None = None, work: _Workspace | None = None) -> np.ndarray:
+def _chain(S: np.ndarray, n: int | None = None,
+           work: propagation.ChainWorkspace | None = None) -> np.ndarray:
     """Rows (z, dz/da, dz/dg) of the products S_k ... S_0 on unit initial states.
 
     The initial states are (z0, z0', r0) = the unit vectors: shape (n+1, 3, 3),
-    [k, row, initial component]. Blocked: products within blocks of ~sqrt(n) steps for
-    all blocks at once, then the blocks chained sequentially (as
-    :func:`rotrod_core.offline.simulate.affine_chain`). With ``work``, S is its padded buffer
-    and n the number of steps.
+    [k, row, initial component], by the kernel's
+    :func:`~rotrod_core.model.propagation.affine_chain`. With ``work``, S is its step
+    buffer and n the number of steps.
     """
     d = S.shape[1]
     if work is None:
-        n = S.shape[0]
-        work = _Workspace()
-        work.steps(n)[:n] = S
-    elif n is None:
+        return propagation.affine_chain(S, np.eye(d, 3, dtype=complex), rows=(0, 3, 5))
+    if n is None:
         raise ValueError('_chain: n (the number of steps) is needed with work')
-    S, B, nb = work.S, work.block, work.blocks
-    P = S.reshape(nb, B, d, d)
-    cum = work.cum
-    cum[:, 0] = P[:, 0]
-    for j in range(1, B):
-        np.matmul(P[:, j], cum[:, j - 1], out=cum[:, j])
-    starts = np.empty((nb, d, 3), dtype=complex)
-    x = np.eye(d, 3, dtype=complex)
-    for i in range(nb):
-        starts[i] = x
-        x = cum[i, -1] @ x
-    rows = [0, 3, 5]
-    out = work.out
-    out[0] = np.eye(d, 3)[rows]
-    np.matmul(cum[:, :, rows, :], starts[:, None], out=out[1:].reshape(nb, B, 3, 3))
-    return out[:n + 1]
+    return propagation.affine_chain(S, np.eye(d, 3, dtype=complex), rows=(0, 3, 5), steps=n,
+                                    work=work)
 
 
 def _stack(c: np.ndarray) -> np.ndarray:
@@ -451,9 +430,10 @@ class _Point:
 class _Problem:
     """Output-error least squares for one record, with some parameters fixed."""
 
-    def __init__(self, rec: _Record, zeta=None, r0=None, work: _Workspace | None = None):
+    def __init__(self, rec: _Record, zeta=None, r0=None,
+                 work: propagation.ChainWorkspace | None = None):
         self.rec = rec
-        self.work = work or _Workspace()
+        self.work = work or propagation.ChainWorkspace()
         self.zeta = zeta        # fixed damping ratio (g = 2 zeta sqrt(a)), or None
         self.r0 = r0            # fixed eccentricity, or None
         self.y = _stack(rec.z[:, None])[:, 0]
@@ -469,7 +449,8 @@ class _Problem:
         g = self.g_of(a, g)
         n = self.rec.n - 1
         with np.errstate(all='ignore'):
-            Y = _chain(_step_matrices(self.rec, a, g, out=self.work.steps(n)), n, self.work)
+            Y = _chain(_step_matrices(self.rec, a, g, out=self.work.steps(n, 7, complex)), n,
+                       self.work)
         if not np.all(np.isfinite(Y)):
             return None
         basis, da, dg = Y[:, 0, :], Y[:, 1, :], Y[:, 2, :]
@@ -833,7 +814,7 @@ def _fixed_value(name, value, *, nonnegative=True):
 
 
 def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX_ITERATIONS,
-         work: _Workspace | None = None):
+         work: propagation.ChainWorkspace | None = None):
     """Identify from a record; ``warm`` = (a, g) starts Gauss-Newton there instead."""
     fixed = tuple(n for n, v in (('damping_ratio', zeta), ('eccentricity', r0))
                   if v is not None)
@@ -993,7 +974,7 @@ class RigIdentifier:
                              f'{warm_iterations!r}')
         self.warm_iterations = warm_iterations
         self._capacity = 2 * int(math.ceil(samples)) + 16
-        self._work = _Workspace()
+        self._work = propagation.ChainWorkspace()
         self.reset()
 
     def reset(self) -> None:

@@ -307,28 +307,6 @@ def omega_jump(co: Coefficients, state, omega_new) -> State:
     return State(u, v, du + dw * v, dv - dw * (co.load_radius + u), theta, omega_new)
 
 
-def rotating_frame_matrix(co: Coefficients, omega, omega_dot):
-    """Augmented system matrix A (shape ``(..., 5, 5)``) of the prescribed-rotation model.
-
-    For x = (u, v, u', v', 1): x' = A x, with the forcing in the last column. Built by
-    evaluating :func:`deflection_accelerations` (the one source of the equations) at
-    the unit states, since the deflection equations are affine in (u, v, u', v').
-    ``omega`` and ``omega_dot`` may be arrays (one matrix per time).
-    """
-    omega = np.asarray(omega, dtype=float)
-    omega_dot = np.broadcast_to(np.asarray(omega_dot, dtype=float), omega.shape)
-    A = np.zeros(omega.shape + (5, 5))
-    A[..., 0, 2] = 1.0
-    A[..., 1, 3] = 1.0
-    f0u, f0v = deflection_accelerations(co, 0.0, 0.0, 0.0, 0.0, omega, omega_dot)
-    A[..., 2, 4], A[..., 3, 4] = f0u, f0v
-    for j, (u, v, du, dv) in enumerate(np.eye(4)):
-        fu, fv = deflection_accelerations(co, u, v, du, dv, omega, omega_dot)
-        A[..., 2, j] = fu - f0u
-        A[..., 3, j] = fv - f0v
-    return A
-
-
 def omega_jump_matrix(co: Coefficients, delta_omega):
     """The jump of :func:`omega_jump` as a 5x5 matrix on (u, v, u', v', 1)."""
     J = np.eye(5)

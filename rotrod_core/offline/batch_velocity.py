@@ -17,7 +17,10 @@ exact for constant coefficients and all vectorised over the systems:
   augmented 3x3 complex exponential has a closed form (a scaling-and-squaring
   exponential where it is ill-conditioned).
 - **k1 != k2**: the same Magnus propagator of the real 5x5 matrix of
-  :func:`rotrod_core.model.equations.rotating_frame_matrix`, by scaling and squaring.
+  :func:`rotrod_core.model.propagation.system_matrix`, by scaling and squaring.
+
+Every Magnus exponent and system matrix comes from :mod:`rotrod_core.model.propagation`,
+the one kernel shared with simulate, the planner and identification.
 
 The step is chosen for the requested ``tolerance`` (m, on u and v along the run):
 each integrator is run on representative systems of the batch (the extremes of every
@@ -37,13 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 
 import rotrod_core.model.equations as model
+import rotrod_core.model.propagation as propagation
 from rotrod_core.command.profiles import Profile
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.numerics.checks import NonFiniteStateError
 from rotrod_core.numerics.expm import expm_batch
 
-_S15 = math.sqrt(15.0)
-_GAUSS3 = np.array([0.5 - _S15 / 10.0, 0.5, 0.5 + _S15 / 10.0])
+_GAUSS3 = np.array(propagation.GAUSS3)
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W        # on [0, 1], weights sum to 1
 _STEP_CHUNK = 64            # Magnus steps whose propagators are formed at once
@@ -116,81 +119,29 @@ def bisect_nodes(nodes: np.ndarray) -> np.ndarray:
     return out
 
 
-# -- complex 2x2 affine algebra (None is a structural zero) --------------------------------
-
-def _mul(a, b):
-    return None if a is None or b is None else a * b
-
-
-def _sum(*terms):
-    out = None
-    for t in terms:
-        if t is not None:
-            out = t if out is None else out + t
-    return out
-
-
-def _neg(a):
-    return None if a is None else -a
-
-
-def _lin(*pairs):
-    return tuple(_sum(*(None if X[i] is None else c * X[i] for c, X in pairs))
-                 for i in range(6))
-
-
-def _comm(X, Y):
-    """[X, Y] of augmented matrices [[x11, x12, xb1], [x21, x22, xb2], [0, 0, 0]]."""
-    x11, x12, x21, x22, xb1, xb2 = X
-    y11, y12, y21, y22, yb1, yb2 = Y
-    c11 = _sum(_mul(x12, y21), _neg(_mul(y12, x21)))
-    c12 = _sum(_mul(x11, y12), _mul(x12, y22), _neg(_mul(y11, x12)), _neg(_mul(y12, x22)))
-    c21 = _sum(_mul(x21, y11), _mul(x22, y21), _neg(_mul(y21, x11)), _neg(_mul(y22, x21)))
-    cb1 = _sum(_mul(x11, yb1), _mul(x12, yb2), _neg(_mul(y11, xb1)), _neg(_mul(y12, xb2)))
-    cb2 = _sum(_mul(x21, yb1), _mul(x22, yb2), _neg(_mul(y21, xb1)), _neg(_mul(y22, xb2)))
-    return (c11, c12, c21, _neg(c11), cb1, cb2)
-
-
-def magnus6(alpha1, alpha2, alpha3):
-    """Sixth-order Magnus Omega from the Gauss-point combinations (Blanes et al. 2000).
-
-    alpha1 = h A2, alpha2 = (sqrt(15) h / 3)(A3 - A1), alpha3 = (10 h / 3)(A3 - 2 A2 + A1)
-    for A_i at the Gauss points 1/2 -+ sqrt(15)/10, 1/2 of the step;
-    Omega = alpha1 + alpha3/12 + [-20 alpha1 - alpha3 + C1, alpha2 + C2] / 240 with
-    C1 = [alpha1, alpha2], C2 = -[alpha1, 2 alpha3 + C1] / 60.
-    """
-    c1 = _comm(alpha1, alpha2)
-    c2 = _lin((-1.0 / 60.0, _comm(alpha1, _lin((2.0, alpha3), (1.0, c1)))))
-    tail = _comm(_lin((-20.0, alpha1), (-1.0, alpha3), (1.0, c1)), _lin((1.0, alpha2), (1.0, c2)))
-    return _lin((1.0, alpha1), (1.0 / 12.0, alpha3), (1.0 / 240.0, tail))
-
+# -- the Magnus exponents, from the one kernel ---------------------------------------------
 
 def complex_form(co: Coefficients):
-    """The complex form's (w0^2, g, re) of isotropic systems.
+    """The complex form's (w0^2, g, re) of isotropic systems, read off the kernel's system.
 
-    z'' + (g + 2iw) z' + (w0^2 - w^2 + iw') z = re (w^2 - iw') is
-    :func:`rotrod_core.model.equations.deflection_accelerations` with z = u + i v, for
-    k1 = k2 and c1 = c2 (w0^2 = k/M, g = c/M, re the load radius).
+    z'' = x10 z + x11 z' + b1 (:func:`rotrod_core.model.propagation.complex_system`):
+    at rest x10 = -w0^2 and x11 = -g; at w = 1 rad/s, b1 = re (m).
     """
-    return (np.asarray(co.w1sq, float), np.asarray(co.g1, float),
-            np.asarray(co.load_radius, float) + np.zeros(np.shape(co.w1sq)))
+    shape = np.shape(co.w1sq)
+    _, _, x10, x11, _, _ = propagation.complex_system(co, np.zeros(shape), np.zeros(shape))
+    _, _, _, _, _, b1 = propagation.complex_system(co, np.ones(shape), np.zeros(shape))
+    return (-np.real(x10) + np.zeros(shape), -np.real(x11) + np.zeros(shape),
+            np.real(b1) + np.zeros(shape))
 
 
-def omega_complex(s, g, re, h, w, wd):
-    """Magnus-6 Omega (6 complex entries) of isotropic systems over steps of length h.
+def omega_complex(co: Coefficients, h, w, wd):
+    """Magnus-6 Omega (complex affine tuple) of isotropic systems over steps of length h.
 
-    ``s, g, re`` (w0^2, g, load radius) broadcast with ``h`` and with ``w[i], wd[i]``,
+    ``co`` (fields of the systems' shape) broadcasts with ``h`` and with ``w[i], wd[i]``,
     the profile at the three Gauss points (axis 0 of ``w`` and ``wd``).
     """
-    q = [w[i] * w[i] - 1j * wd[i] for i in range(3)]
-    k2, k3 = _S15 * h / 3.0, 10.0 * h / 3.0
-    dq, sq = q[2] - q[0], q[2] - 2.0 * q[1] + q[0]
-    a2 = s - q[1]
-    c2 = g + 2j * w[1]
-    alpha1 = (None, h + 0j, -h * a2, -h * c2, None, h * re * q[1])
-    alpha2 = (None, None, k2 * dq, -2j * k2 * (w[2] - w[0]), None, k2 * re * dq)
-    alpha3 = (None, None, k3 * sq, -2j * k3 * (w[2] - 2.0 * w[1] + w[0]), None, k3 * re * sq)
-    return magnus6(alpha1, alpha2, alpha3)
+    features = propagation.complex_system_features(co)
+    return propagation.magnus6_complex_features(h, features, w, wd)
 
 
 def _complex_to_real(entries):
@@ -248,24 +199,15 @@ def expm_complex(entries, s):
 
 
 def omega_real(co: Coefficients, h, w, wd):
-    """Magnus-6 Omega (real 5x5) from :func:`rotrod_core.model.equations.rotating_frame_matrix`.
+    """Magnus-6 Omega (real 5x5) of :func:`rotrod_core.model.propagation.system_matrix`.
 
     ``co`` arrays of shape (n,); ``h`` broadcastable to (K, n); ``w[i], wd[i]`` of shape
     (K, 1) or (K, n). Returns shape (K, n, 5, 5).
     """
     shape = np.broadcast_shapes(np.shape(h), np.shape(w[0]), np.shape(co.w1sq))
-    A = [model.rotating_frame_matrix(co, np.broadcast_to(w[i], shape),
-                                     np.broadcast_to(wd[i], shape)) for i in range(3)]
-    hh = np.broadcast_to(h, shape)[..., None, None]
-    a1 = hh * A[1]
-    a2 = (_S15 / 3.0) * hh * (A[2] - A[0])
-    a3 = (10.0 / 3.0) * hh * (A[2] - 2.0 * A[1] + A[0])
-
-    def comm(X, Y):
-        return X @ Y - Y @ X
-    c1 = comm(a1, a2)
-    c2 = -comm(a1, 2.0 * a3 + c1) / 60.0
-    return a1 + a3 / 12.0 + comm(-20.0 * a1 - a3 + c1, a2 + c2) / 240.0
+    A = [propagation.system_matrix(co, np.broadcast_to(w[i], shape),
+                                   np.broadcast_to(wd[i], shape)) for i in range(3)]
+    return propagation.magnus6(np.broadcast_to(h, shape), *A)
 
 
 def _gauss_profile(profile: Profile, t0, h):
@@ -284,8 +226,8 @@ def step_states(kind: int, co: Coefficients, profile: Profile, t0, h, z, p):
     """
     w, wd = _gauss_profile(profile, t0, h)
     if kind != 2:
-        s, g, re = complex_form(co)
-        E11, E12, E21, E22, y1, y2 = expm_complex(omega_complex(s, g, re, h, w, wd), s)
+        s, _, _ = complex_form(co)
+        E11, E12, E21, E22, y1, y2 = expm_complex(omega_complex(co, h, w, wd), s)
         return E11 * z + E12 * p + y1, E21 * z + E22 * p + y2
     X = expm_batch(omega_real(co, h, w, wd))
     x = np.stack([z.real, z.imag, p.real, p.imag, np.ones(np.shape(z))], axis=-1)
@@ -318,14 +260,14 @@ def run_magnus(kind: int, co: Coefficients, profile: Profile, nodes: np.ndarray,
     jumps = _jump_after(profile, nodes)
     re = np.asarray(co.load_radius, float) + np.zeros(n)
     if kind != 2:
-        s, g, _ = complex_form(co)
+        s, _, _ = complex_form(co)
     for start in range(0, K, _STEP_CHUNK):
         stop = min(start + _STEP_CHUNK, K)
         t0 = nodes[start:stop, None]
         h = np.diff(nodes[start:stop + 1])[:, None]
         w, wd = _gauss_profile(profile, t0, h)
         if kind != 2:
-            E11, E12, E21, E22, y1, y2 = expm_complex(omega_complex(s, g, re, h, w, wd), s)
+            E11, E12, E21, E22, y1, y2 = expm_complex(omega_complex(co, h, w, wd), s)
             for k in range(stop - start):
                 z, p = E11[k] * z + E12[k] * p + y1[k], E21[k] * z + E22[k] * p + y2[k]
                 Z[start + k + 1], P[start + k + 1] = z, p

@@ -2,10 +2,11 @@
 
 Velocity drive: the deflection equations are linear with time-varying coefficients
 that depend on w(t) only. Each step applies the fourth-order Magnus propagator
-(two Gauss points, one commutator) of the augmented 5x5 system, computed for all
-steps at once; its error depends on how fast w changes, not on the vibration
-frequency, so a 1 ms step is accurate to ~1e-14 m on the paper's run. The steps are
-chained by a blocked product (sequential over blocks, vectorized within).
+(two Gauss points, one commutator) of the augmented 5x5 system of
+:mod:`rotrod_core.model.propagation` (the one kernel), computed for all steps at
+once; its error depends on how fast w changes, not on the vibration frequency, so a
+1 ms step is accurate to ~1e-14 m on the paper's run. The steps are chained by the
+kernel's blocked product (sequential over blocks, vectorized within).
 
 Torque drive: the coupled equations are nonlinear; classical RK4 at fixed step.
 """
@@ -18,6 +19,7 @@ from collections.abc import Callable
 import numpy as np
 
 import rotrod_core.model.equations as model
+import rotrod_core.model.propagation as propagation
 from rotrod_core.command.profiles import Profile
 from rotrod_core.model.equations import (
     Coefficients,
@@ -27,6 +29,7 @@ from rotrod_core.model.equations import (
     make_state,
 )
 from rotrod_core.model.params import RodParams
+from rotrod_core.model.propagation import GAUSS2, affine_chain
 from rotrod_core.numerics.checks import NonFiniteStateError
 from rotrod_core.numerics.expm import expm_batch
 from rotrod_core.numerics.rk4 import rk4_step
@@ -34,7 +37,6 @@ from rotrod_core.offline.result import SimulationResult
 
 MAX_STEPS = 50_000_000
 _CHUNK = 32768
-_GAUSS = math.sqrt(3.0) / 6.0
 
 
 def time_grid(t_end, dt) -> np.ndarray:
@@ -62,44 +64,14 @@ def time_grid(t_end, dt) -> np.ndarray:
     return t
 
 
-def affine_chain(phi: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """States x_0..x_N of x_{k+1} = phi_k x_k, for phi of shape (N, n, n).
-
-    Blocked: cumulative products within blocks of ~sqrt(N) steps are formed for all
-    blocks at once, then the blocks are chained sequentially.
-    """
-    N, n = phi.shape[0], phi.shape[1]
-    B = max(1, int(math.sqrt(N)))
-    nb = -(-N // B)
-    pad = nb * B - N
-    if pad:
-        phi = np.concatenate([phi, np.broadcast_to(np.eye(n), (pad, n, n))])
-    P = phi.reshape(nb, B, n, n)
-    cum = np.empty_like(P)
-    cum[:, 0] = P[:, 0]
-    for j in range(1, B):
-        np.matmul(P[:, j], cum[:, j - 1], out=cum[:, j])
-    starts = np.empty((nb, n))
-    x = np.asarray(x0, dtype=float)
-    for i in range(nb):
-        starts[i] = x
-        x = cum[i, -1] @ x
-    out = np.empty((nb * B + 1, n))
-    out[0] = x0
-    out[1:] = np.einsum('ijkl,il->ijk', cum, starts).reshape(-1, n)
-    return out[:N + 1]
-
-
 def magnus_propagators(co: Coefficients, profile: Profile, nodes: np.ndarray) -> np.ndarray:
     """Fourth-order Magnus step matrices exp(Omega_k) between consecutive ``nodes``."""
     h = np.diff(nodes)
-    t1 = nodes[:-1] + (0.5 - _GAUSS) * h
-    t2 = nodes[:-1] + (0.5 + _GAUSS) * h
-    A1 = model.rotating_frame_matrix(co, profile.omega(t1), profile.omega_dot(t1))
-    A2 = model.rotating_frame_matrix(co, profile.omega(t2), profile.omega_dot(t2))
-    hh = h[:, None, None]
-    omega_k = 0.5 * hh * (A1 + A2) + (math.sqrt(3.0) / 12.0) * hh**2 * (A2 @ A1 - A1 @ A2)
-    return expm_batch(omega_k)
+    t1 = nodes[:-1] + GAUSS2[0] * h
+    t2 = nodes[:-1] + GAUSS2[1] * h
+    A1 = propagation.system_matrix(co, profile.omega(t1), profile.omega_dot(t1))
+    A2 = propagation.system_matrix(co, profile.omega(t2), profile.omega_dot(t2))
+    return expm_batch(propagation.magnus4(h, A1, A2))
 
 
 def _velocity_drive(params, co, profile, t, coupling, initial):
