@@ -26,7 +26,7 @@ import numpy as np
 from rotrod_core.analysis.critical import STARTS, critical_speed, critical_speed_for_profile
 from rotrod_core.analysis.modes import dynamic_frequencies, modal_analysis, static_deflection
 from rotrod_core.analysis.stages import format_stage_table, stage_extremes
-from rotrod_core.command.planner import plan_spin_up
+from rotrod_core.command.planner import plan_spin_up, residual_bound
 from rotrod_core.command.profiles import Eq26Profile
 from rotrod_core.command.registry import (
     OPTION_PROFILES,
@@ -224,11 +224,14 @@ def cmd_plan(args) -> int:
             reference = Eq26Profile(period=15.0, omega_target=args.omega)
             reference_run = simulate(params, reference, 15.0, dt=0.01)
         spin_up_plan(plan, run, figure, reference, reference_run, args.deflection_limit)
-    band = (f', band (1 +- {args.robust:g}) w0 residual {plan.band_residual:.3g} m'
+    predicted = [math.nan if x is None else x for x in (
+        plan.peak_deflection, plan.residual_amplitude, plan.band_residual)]
+    band = (f', band (1 +- {args.robust:g}) w0 residual {residual_bound(predicted[2])}'
             if args.robust else '')
-    print(f'plan {args.start:g} -> {args.omega:g} rad/s: duration {T:.4g} s, peak '
-          f'{plan.peak_deflection:.6g} m, residual {plan.residual_amplitude:.3g} m{band}, '
-          f'max |w\'| {plan.max_angular_acceleration:.4g} rad/s^2; wrote {args.output}'
+    print(f'plan {args.start:g} -> {args.omega:g} rad/s: duration {T:.3f} s, peak '
+          f'{predicted[0] * 1e3:.3f} mm, residual '
+          f'{residual_bound(predicted[1])}{band}, '
+          f'max |w\'| {plan.max_angular_acceleration:.3g} rad/s^2; wrote {args.output}'
           + (f' and {figure}' if figure is not None else ''))
     return 0
 

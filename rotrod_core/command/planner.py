@@ -538,6 +538,27 @@ def _peak(r2: np.ndarray) -> float:
     return float(math.sqrt(top))
 
 
+def residual_bound(value: float, bound: float | None = None) -> str:
+    """A whirl amplitude (m) as the bound it meets: '<= X um'.
+
+    X is ``bound`` (m) when the value is within it, else the value rounded up to two
+    digits. What a plan leaves is a bound met, not one machine's rounding: a residual
+    far below its bound is where the planner's search stopped, and its digits move
+    with the arithmetic of the machine (docs/planner.md#limits-and-doubts).
+    """
+    value = float(value)
+    if not math.isfinite(value):
+        return 'nan um'
+    if bound is not None and value <= bound:
+        return f'<= {bound * 1e6:g} um'
+    um = value * 1e6
+    if um <= 0.0:
+        return '<= 0 um'
+    unit = 10.0 ** (math.floor(math.log10(um)) - 1)
+    rounded = float(f'{math.ceil(um / unit * (1 - 1e-12)) * unit:.2g}')
+    return f'<= {rounded:g} um'
+
+
 def _speed_cap(params: RodParams, scale: float) -> float:
     """Speeds kept below this in a plan: 0.98 x the lowest natural frequency (scaled)."""
     return 0.98 * scale * min(float(params.natural_frequency_radial),

@@ -26,7 +26,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from rotrod_core.command.planner import plan_spin_up
+from rotrod_core.command.planner import plan_spin_up, residual_bound
 from rotrod_core.command.profiles import (
     ConstantProfile,
     Eq26Profile,
@@ -194,8 +194,9 @@ def stream_duration(profile: Profile) -> float:
 def describe(profile: Profile, options: dict) -> list:
     """Lines that say what a planned profile is and what the simulator must allow.
 
-    Empty for the other profiles. The first line: duration, peak deflection,
-    residual whirl (and over the band), largest |w'| and the bound honoured; the
+    Empty for the other profiles. The first line: duration, peak deflection, the
+    bound the residual whirl meets (and over the band), largest |w'| and the
+    acceleration bound honoured; the
     second: the ``max_angular_acceleration`` the simulator needs.
     """
     if not isinstance(profile, SpinUpProfile):
@@ -207,17 +208,17 @@ def describe(profile: Profile, options: dict) -> list:
     peak = nan if profile.peak_deflection is None else profile.peak_deflection
     residual = nan if profile.residual_amplitude is None else profile.residual_amplitude
     band_residual = nan if profile.band_residual is None else profile.band_residual
-    band = (f', at most {band_residual * 1e6:.3g} um for natural frequencies '
+    band = (f', {residual_bound(band_residual, o["residual"])} for natural frequencies '
             f'within (1 +- {profile.robust:g}) w0' if profile.robust else '')
     honoured = (f'within {PLANNED_ACCELERATION_FRACTION:g} x max_angular_acceleration '
                 f'{bound:g} rad/s^2' if bound else 'no bound (max_angular_acceleration 0)')
     lead = f' after {profile.t_start:g} s at the start speed' if profile.t_start else ''
     plan = (f'planned {profile.omega_start:g} -> {profile.omega_target:g} rad/s{lead}: '
-            f'duration {profile.duration:.4g} s, peak deflection '
-            f'{peak * 1e3:.4g} mm '
+            f'duration {profile.duration:.3f} s, peak deflection '
+            f'{peak * 1e3:.3f} mm '
             f'(deflection_limit {o["deflection_limit"] * 1e3:g} mm), residual whirl '
-            f'{residual * 1e6:.3g} um{band} (bound '
-            f'{o["residual"] * 1e6:.3g} um), largest |w\'| {peak_acc:.4g} rad/s^2 ({honoured})')
+            f'{residual_bound(residual, o["residual"])}{band}, largest |w\'| {peak_acc:.3g} '
+            f'rad/s^2 ({honoured})')
     need = math.ceil(peak_acc * 1e3) / 1e3
     if bound:
         must = (f'the simulator must allow |w\'| up to {need:g} rad/s^2: give it the same '

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from rotrod_core.command.planner import residual_bound
+
 MM = 1e3
 
 
@@ -146,11 +148,17 @@ def real_rig_table(summaries: list, limit: float) -> str:
 def spin_up_table(rows: list) -> str:
     """Eq. 26 beside planned spin-ups (:mod:`rotrod_core.reporting.spin_ups`)."""
     header = ['spin-up, Table 1, 0 -> 2 rad/s, 3 mm', 'duration [s]', "largest |w'| [rad/s^2]",
-              'peak deflection [mm]', 'residual whirl [um]',
-              'largest residual, w0 x 0.9..1.1 [um]']
-    return table(header, [[r.label, f'{r.duration:.4g}', f'{r.max_angular_acceleration:.3g}',
-                           f'{MM * r.peak_deflection:.4f}', f'{1e6 * r.residual:.3g}',
-                           f'{1e6 * r.band_residual:.3g}'] for r in rows])
+              'peak deflection [mm]', 'residual whirl', 'largest residual, w0 x 0.9..1.1']
+    return table(header, [[r.label, f'{r.duration:.3f}', f'{r.max_angular_acceleration:.3g}',
+                           f'{MM * r.peak_deflection:.3f}', _whirl(r.residual, r.bound),
+                           _whirl(r.band_residual, r.band_bound)] for r in rows])
+
+
+def _whirl(value: float, bound: float | None) -> str:
+    """A measured whirl (m) in um; a planned one as the bound it meets."""
+    if bound is None:
+        return f'{1e6 * value:.3g} um'
+    return residual_bound(value, bound)
 
 
 def paper_report(*, facts, stages, frequencies, critical, limit, figures, recording,

@@ -19,7 +19,7 @@ import numpy as np
 
 from rotrod_core.command.planner import whirl_residual
 from rotrod_core.command.profiles import Eq26Profile, Profile
-from rotrod_core.command.registry import plan_from_options
+from rotrod_core.command.registry import options_with_defaults, plan_from_options
 from rotrod_core.model.params import RodParams
 from rotrod_core.offline.result import SimulationResult
 from rotrod_core.offline.simulate import simulate
@@ -59,6 +59,8 @@ class SpinUp:
         residual: free whirl about the static deflection at the target, m, after arrival.
         band_residual: the largest residual over natural frequencies (1 +- BAND) w0, m.
         run: the nominal run over the spin-up.
+        bound: the residual a plan is held to, m (None: not planned).
+        band_bound: the residual a robust plan holds over its band, m (None: none).
     """
 
     label: str
@@ -69,6 +71,8 @@ class SpinUp:
     residual: float
     band_residual: float
     run: SimulationResult
+    bound: float | None = None
+    band_bound: float | None = None
 
 
 def _arrival(params: RodParams, profile: Profile, duration: float) -> tuple:
@@ -79,7 +83,8 @@ def _arrival(params: RodParams, profile: Profile, duration: float) -> tuple:
                                run.dv[-1])
 
 
-def measure(label: str, profile: Profile, duration: float, params: RodParams) -> SpinUp:
+def measure(label: str, profile: Profile, duration: float, params: RodParams,
+            bound: float | None = None, band_bound: float | None = None) -> SpinUp:
     """Simulate ``profile`` to ``duration`` on ``params`` and across the band."""
     run, residual = _arrival(params, profile, duration)
     band = max(_arrival(params.replace(youngs_modulus=params.youngs_modulus * s * s), profile,
@@ -87,7 +92,7 @@ def measure(label: str, profile: Profile, duration: float, params: RodParams) ->
     return SpinUp(label=label, profile=profile, duration=duration,
                   max_angular_acceleration=float(np.max(np.abs(run.omega_dot))),
                   peak_deflection=float(np.max(np.hypot(run.u, run.v))), residual=residual,
-                  band_residual=band, run=run)
+                  band_residual=band, run=run, bound=bound, band_bound=band_bound)
 
 
 def spin_ups(params: RodParams | None = None) -> list:
@@ -96,6 +101,9 @@ def spin_ups(params: RodParams | None = None) -> list:
     eq26 = Eq26Profile(period=15.0, omega_target=OMEGA_TARGET)
     rows = [measure('Eq. 26 (the paper)', eq26, eq26.period, params)]
     for label, options in PLANNED:
-        plan = plan_from_options(params, {'omega_target': OMEGA_TARGET, **options})
-        rows.append(measure(label, plan, plan.duration, params))
+        full = options_with_defaults({'omega_target': OMEGA_TARGET, **options})
+        plan = plan_from_options(params, full)
+        bound = float(full['residual'])
+        rows.append(measure(label, plan, plan.duration, params, bound,
+                            bound if full['robust'] else None))
     return rows

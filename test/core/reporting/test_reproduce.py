@@ -402,12 +402,31 @@ def same_text_and_numbers(a, b):
     return True
 
 
+PLANNER_SPREAD = {1: 0.1, 2: 0.5, 3: 0.01, 5: 1.0}
+"""Columns of the spin-up table that a planned row fills from the planner's local search
+(duration, |w'|, peak, band residual), with the relative spread over which that search
+ends on other CPUs (docs/planner.md#limits-and-doubts); the residual column is the bound."""
+
+
+def same_within(a, b, spread):
+    """Equal text; every number within ``spread`` (relative) of the other."""
+    pat = r'-?\d+(?:\.\d+)?(?:e[+-]?\d+)?'
+    if re.sub(pat, '#', a) != re.sub(pat, '#', b):
+        return False
+    return all(abs(float(x) - float(y)) <= spread * max(abs(float(x)), abs(float(y)))
+               for x, y in zip(re.findall(pat, a), re.findall(pat, b)))
+
+
 def assert_same_table(documented, generated, where):
     assert documented[0] == generated[0], where
     assert len(documented[1]) == len(generated[1]), where
+    planned = documented[0][0].startswith('spin-up, ')
     for d, g in zip(documented[1], generated[1]):
-        for dc, gc in zip(d, g):
-            assert same_text_and_numbers(dc, gc), (where, dc, gc)
+        for k, (dc, gc) in enumerate(zip(d, g)):
+            if planned and d[0].startswith('planned') and k in PLANNER_SPREAD:
+                assert same_within(dc, gc, PLANNER_SPREAD[k]), (where, dc, gc)
+            else:
+                assert same_text_and_numbers(dc, gc), (where, dc, gc)
 
 
 def test_docs_tables_are_the_ones_the_commands_generate(reproduced, analyzed):
