@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import sys
 
+from rotrod_core.reporting.bag import interface_definitions
+
 from . import profile_publisher, rerun_logger, rig_monitor, simulator
 from .interfaces import ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
 from .parameter_specs import format_value, range_text
@@ -74,7 +76,18 @@ def render() -> str:
              'combination that makes no physical sense).', '']
     for executable, module, specs, read_only in NODES:
         lines += node_section(executable, module, specs, read_only)
-    return '\n'.join(lines)
+    return '\n'.join(lines + messages_section())
+
+
+def messages_section() -> list:
+    """The Markdown lines of rotrod's own messages: their definitions, with units."""
+    lines = ['## Messages (`rotrod_interfaces`)', '',
+             'rotrod\'s own message types, defined in `rotrod_interfaces/msg/` (an ament_cmake '
+             'package in this repository; `./run.sh` builds it into the venv, `colcon build` '
+             'on a ROS install). Units are in the comments.', '']
+    for name, text in sorted(interface_definitions().items()):
+        lines += [f'### `{name}`', '', '```', text.rstrip('\n'), '```', '']
+    return lines
 
 
 def main() -> int:

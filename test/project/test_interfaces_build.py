@@ -85,10 +85,9 @@ def test_a_missing_compiler_is_named(monkeypatch):
 
 def _samples():
     from builtin_interfaces.msg import Time
-    from std_msgs.msg import Header
-
     from rotrod_interfaces.action import SpinUp
     from rotrod_interfaces.msg import DynamicFrequencies, RigEstimate, WhirlEstimate
+    from std_msgs.msg import Header
     header = Header(stamp=Time(sec=12, nanosec=345), frame_id='')
     return [
         DynamicFrequencies(header=header, omega=2.0, f1=1.613061, f2=2.249681),
