@@ -67,10 +67,10 @@ INTERFACES = (
         'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
     sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
         "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
-        '(drive torque), by name or as the one entry of a packed field; other joints '
-        'ignored; the same shaping, limits and timeout as cmd/omega and cmd/torque; a '
-        'malformed message is rejected with a warning (docs/ros_integration.md)',
-        COMMAND_QOS_DEPTH),
+        '(drive torque), read by name; other joints ignored; each field must be empty or '
+        'have one entry per name (sensor_msgs/JointState), else the message is rejected '
+        'with a warning and changes nothing; the same shaping, limits and timeout as '
+        'cmd/omega and cmd/torque (docs/ros_integration.md)', COMMAND_QOS_DEPTH),
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
         "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
