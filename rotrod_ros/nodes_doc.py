@@ -13,7 +13,7 @@ import sys
 from rotrod_core.reporting.bag import interface_definitions
 
 from . import profile_publisher, rerun_logger, rig_monitor, simulator
-from .interfaces import ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
+from .interfaces import ACTION, ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
 from .parameter_specs import format_value, range_text
 from .parameters import ALL_SPECS as SIMULATOR_SPECS
 
@@ -27,7 +27,7 @@ NODES = (
 """Each executable: its name, module (NODE_NAME, INTERFACES, docstring), parameter
 specs, and whether all its parameters are read-only (None: each spec says)."""
 
-KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv'}
+KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv', ACTION: 'action'}
 
 
 def _cell(text: str) -> str:
@@ -43,7 +43,8 @@ def node_section(executable: str, module, specs, read_only: bool | None) -> list
              '| interface | type | content (SI units) |', '|---|---|---|']
     order = {kind: n for n, kind in enumerate(KINDS)}
     for i in sorted(module.INTERFACES, key=lambda i: order[i.kind]):
-        qos = f' (QoS depth {i.depth})' if i.kind != SERVICE and i.depth != 10 else ''
+        qos = (f' (QoS depth {i.depth})' if i.kind not in (SERVICE, ACTION) and i.depth != 10
+               else '')
         if i.keep_all:
             qos = (' (QoS KEEP_ALL)' if i.keep_all == ALWAYS else
                    f' (QoS KEEP_ALL {i.keep_all}, else depth {i.depth})')
