@@ -124,10 +124,10 @@ def cmd_simulate(args) -> int:
     bag_settings = None
     if args.bag is not None:
         from rotrod_core.live.publication import PublicationSettings
-        from rotrod_core.reporting.bag import topic_name
+        from rotrod_core.reporting.bag import check_namespace
         bag_settings = PublicationSettings(publish_rate=args.bag_rate,
                                            frame_prefix=args.bag_frame_prefix)
-        topic_name(args.bag_namespace, 'x')       # a bad namespace is refused here
+        check_namespace(args.bag_namespace)
         if args.bag.exists():
             raise ValueError(f'{args.bag} exists: a bag is written into a new directory')
     initial = _initial(args)

@@ -149,9 +149,8 @@ class ProfilePublisher(Node):
                 self, params, values['max_angular_acceleration'],
                 settle_time=values['settle_time'], residual_window=values['residual_window'],
                 arrival_timeout=values['arrival_timeout'])
-            self.profile: Profile = ConstantProfile(0.0)
-            self.name, self.duration, self.loop, self.hold = 'spin_up', 0.0, False, False
-            self._reset_stream(done=True)
+            self.stream(ConstantProfile(0.0), 0.0)      # nothing to stream until a goal
+            self.done = True
             server = self.server
             io = interfaces.create(self, INTERFACES, {
                 'joint_states': server.on_joint_state, 'tip/deflection': server.on_deflection,
@@ -161,7 +160,7 @@ class ProfilePublisher(Node):
                                    'SpinUp)')
         else:
             try:
-                self.profile = make_profile(values)
+                self.profile: Profile = make_profile(values)
             except ValueError as exc:
                 raise ConfigurationError(str(exc)) from None
             for line in describe(self.profile, values):

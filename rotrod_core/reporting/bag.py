@@ -63,10 +63,16 @@ SOURCE_INTERFACES = Path(__file__).resolve().parents[2] / interface.INTERFACES_P
 """The interface package's sources in a checkout (used when none is installed)."""
 
 
-def topic_name(namespace: str, name: str) -> str:
-    """The full name of one of the node's topics in ``namespace`` (which starts with /)."""
+def check_namespace(namespace: str) -> str:
+    """``namespace``, or ValueError unless it starts with /."""
     if not namespace.startswith('/'):
         raise ValueError(f'namespace must start with /, got {namespace!r}')
+    return namespace
+
+
+def topic_name(namespace: str, name: str) -> str:
+    """The full name of one of the node's topics in ``namespace`` (which starts with /)."""
+    check_namespace(namespace)
     if name.startswith('/'):
         return name
     return '/'.join(['', *[p for p in namespace.split('/') if p], name])
@@ -236,7 +242,7 @@ def write_bag(path: str | Path, run, settings: PublicationSettings | None = None
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     settings = settings or PublicationSettings()
-    topic_name(namespace, 'x')                      # a bad namespace raises here
+    check_namespace(namespace)
     path = Path(path)
     if path.exists():
         raise ValueError(f'{path} exists: a bag is written into a new directory')
