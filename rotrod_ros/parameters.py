@@ -18,7 +18,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
-from rotrod_core.live.loop import LoopSettings
+from rotrod_core.live.publication import PublicationSettings
 from rotrod_core.live.scheduling import MAX_CPU_LATENCY, MAX_PRIORITY
 from rotrod_core.model.equations import COUPLINGS, STATE_FIELDS
 from rotrod_core.model.params import FIELDS, FieldInfo, RodParams
@@ -30,8 +30,6 @@ __all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'Parameter
            'descriptor', 'rod_params']
 
 EXECUTORS = ('single_threaded', 'events')
-MIN_ESTIMATE_SAMPLES = 20
-"""Fewest publications an estimate window may hold."""
 
 
 def rod_spec(info: FieldInfo) -> Spec:
@@ -52,17 +50,15 @@ _OPTIONAL_ROD_FIELDS = tuple(info.name for info in FIELDS if info.default is Non
 
 
 @dataclass(frozen=True)
-class NodeSettings(LoopSettings):
-    """Settings of the node (not of the physics): the loop's and its own; NODE_SPECS."""
+class NodeSettings(PublicationSettings):
+    """Settings of the node (not of the physics); NODE_SPECS.
 
-    marker_trail_length: int = 200
-    marker_deflection_scale: float = 20.0
-    disk_radius: float = 0.15
-    frame_prefix: str = ''
+    The loop's, the publication's (the class a bag is written with,
+    :mod:`rotrod_core.live.publication`) and the node's own.
+    """
+
     deflection_noise: float = 0.0
     noise_seed: int = 0
-    estimate_window: float = 1.0
-    estimate_rate: float = 10.0
     executor: str = 'single_threaded'
     wait_for_subscribers: int = 0
 
@@ -207,14 +203,6 @@ def build_settings(values: Mapping[str, Any]) -> tuple[EngineConfig, NodeSetting
     if node.publish_rate > engine.physics_rate:
         raise ValueError(f'publish_rate {node.publish_rate:g} Hz exceeds physics_rate '
                          f'{engine.physics_rate:g} Hz: there would be nothing new to publish')
-    if node.estimate_window:
-        if node.estimate_window < MIN_ESTIMATE_SAMPLES * node.publish_period:
-            raise ValueError(f'estimate_window {node.estimate_window:g} s holds fewer than '
-                             f'{MIN_ESTIMATE_SAMPLES} publications at publish_rate '
-                             f'{node.publish_rate:g} Hz: too few samples to estimate from')
-        if node.estimate_rate > node.publish_rate:
-            raise ValueError(f'estimate_rate {node.estimate_rate:g} Hz exceeds publish_rate '
-                             f'{node.publish_rate:g} Hz: estimates are made on publications')
     return engine, node
 
 

@@ -21,15 +21,14 @@ leaves a file without footer holding everything up to its last write, at most
 from __future__ import annotations
 
 import argparse
-import bisect
 import sys
 import time
 
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
 
 from rotrod_core.reporting.recording import RecordingWriter
 
@@ -48,8 +47,6 @@ both sides: the simulator waits for the logger instead of dropping (ALWAYS)."""
 TAKE_BUDGET = 0.05
 """Wall seconds a callback spends at most taking the messages already received (the
 flush timer runs between)."""
-JOINT_HISTORY = 100000
-"""Joint states whose stamps the logger keeps for the frequencies that come after them."""
 CLOSE_BUDGET = 10.0
 """Wall seconds the logger spends at most at its end on messages already received."""
 
@@ -72,16 +69,16 @@ READ_ONLY = True
 
 INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pending)
     interfaces.sub('joint_states', JointState, "joint 'hub': w rad/s and the hub torque "
-                   'N m; its stamp also times the frequencies that follow it', QOS_DEPTH,
-                   ALWAYS),
+                   'N m', QOS_DEPTH, ALWAYS),
     interfaces.sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame',
                    QOS_DEPTH, ALWAYS),
     interfaces.sub('tip/position', PointStamped, 'the mass in the inertial frame, m',
                    QOS_DEPTH, ALWAYS),
-    interfaces.sub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w',
+    interfaces.sub('frequencies', DynamicFrequencies, 'f1, f2 Hz at the current w, at '
+                   'their stamp', QOS_DEPTH, ALWAYS),
+    interfaces.sub('frequencies/estimate', WhirlEstimate, 'f1, f2 Hz estimated from the '
+                   "motion (NaN where not valid), at their stamp: the window's middle",
                    QOS_DEPTH, ALWAYS),
-    interfaces.sub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from '
-                   'the motion', QOS_DEPTH, ALWAYS),
 )
 
 
@@ -109,10 +106,6 @@ class RerunLogger(Node):
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
         self._omega_at_rest = 0.0
-        # joint states' (DDS source time ns, stamp s), oldest first, for the frequencies
-        self._joint_times: list = []
-        self._joint_stamps: list = []
-        self._unstamped: list = []       # (source time ns, message, is the estimate)
         handlers = {'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
                     'tip/position': self._on_position,
                     'frequencies': lambda m, info: self._on_frequencies(m, info, False),
@@ -138,8 +131,6 @@ class RerunLogger(Node):
             return
         i = list(msg.name).index('hub')
         t, omega = to_seconds(msg.header.stamp), msg.velocity[i]
-        self._joint_times.append(info['source_timestamp'])
-        self._joint_stamps.append(t)
         if self._last_stamp is None:
             self.get_logger().info(f'receiving: first joint state stamped {t:.3f} s')
             self._omega_at_rest = omega
@@ -157,37 +148,9 @@ class RerunLogger(Node):
         p = msg.point
         self.writer.add_position(to_seconds(msg.header.stamp), p.x, p.y, p.z)
 
-    def _on_frequencies(self, msg: Float64MultiArray, info, estimate: bool) -> None:
-        if len(msg.data) >= 2:
-            self._unstamped.append((info['source_timestamp'], msg, estimate))
-
-    def _stamp_frequencies(self, final: bool = False) -> None:
-        """Give the frequencies received the stamp of their joint state, and write them.
-
-        Float64MultiArray has no stamp: the simulator publishes it after the joint state
-        of the same instant, so it takes the stamp of the last joint state published
-        (DDS source time) before it. One is stamped once a later joint state has come
-        (until then one may still be on its way), or at the end (``final``). Frequencies
-        from before the first joint state received are left out.
-        """
-        times, stamps, waiting = self._joint_times, self._joint_stamps, []
-        if not times:
-            if final:
-                self._unstamped.clear()
-            return
-        newest = times[-1]
-        for sent, msg, estimate in self._unstamped:
-            if sent > newest and not final:
-                waiting.append((sent, msg, estimate))
-                continue
-            k = bisect.bisect_right(times, sent) - 1
-            if k >= 0:
-                self.writer.add_frequencies(stamps[k], msg.data[0], msg.data[1], estimate)
-        self._unstamped = waiting
-        # the last JOINT_HISTORY joint states: the frequencies' queue can be that far
-        # behind the joint states' (each subscription has its own)
-        if len(times) > 2 * JOINT_HISTORY:
-            del times[:JOINT_HISTORY], stamps[:JOINT_HISTORY]
+    def _on_frequencies(self, msg: DynamicFrequencies | WhirlEstimate, info,
+                        estimate: bool) -> None:
+        self.writer.add_frequencies(to_seconds(msg.header.stamp), msg.f1, msg.f2, estimate)
 
     def _take_pending(self, budget: float = TAKE_BUDGET) -> int:
         """Handle the messages received but not taken yet, for up to ``budget`` s.
@@ -213,7 +176,6 @@ class RerunLogger(Node):
                     progress = True
             if not progress:
                 break
-        self._stamp_frequencies()
         return taken
 
     def _flush(self) -> None:
@@ -226,7 +188,6 @@ class RerunLogger(Node):
     def close(self) -> None:
         """Handle the messages already received, write what is buffered, close the file."""
         drained = self._take_pending(budget=CLOSE_BUDGET)
-        self._stamp_frequencies(final=True)
         self.writer.close()
         if drained:
             self.get_logger().info(f'handled {drained} messages received before the end')

@@ -17,10 +17,10 @@ import sys
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
+from rotrod_interfaces.msg import RigEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-from rotrod_core.estimation.monitor import ESTIMATE_FIELDS, MonitorConfig, RigMonitor
+from rotrod_core.estimation.monitor import MonitorConfig, RigMonitor
 
 from . import interfaces, messages, node_main, parameter_specs
 from .interfaces import pub, sub
@@ -30,8 +30,6 @@ from .parameters import ROD_SPECS, rod_params
 
 NODE_NAME = 'rotrod_rig_monitor'
 QOS_DEPTH = 1000
-ESTIMATE_LABEL = ','.join(f'{name}[{unit}]' for name, unit in ESTIMATE_FIELDS)
-"""Label of rig/estimate's single dimension: the fields and their units, in order."""
 
 MONITOR_SPECS = (
     Spec('window', 5.0, 'identification window, of the samples\' time', 's', 0.2, 600.0),
@@ -53,12 +51,11 @@ READ_ONLY = True
 INTERFACES = (
     sub('joint_states', JointState, "joint 'hub': velocity w, rad/s", QOS_DEPTH),
     sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame', QOS_DEPTH),
-    pub('rig/estimate', Float64MultiArray, 'every identification (update_rate Hz of the '
-        "samples' time), one dimension whose label names each field with its unit: w0 "
-        'rad/s, r0 m, zeta and their standard deviations, the quasi-static and '
-        'sudden-start critical speeds for deflection_limit rad/s, the tip stiffness '
-        'w0^2 M N/m and its relative deviation from the nominal one, the residual m, '
-        "the window's end s"),
+    pub('rig/estimate', RigEstimate, 'every identification (update_rate Hz of the '
+        "samples' time), stamped at the window's last sample: w0 rad/s, r0 m, zeta and "
+        'their standard deviations, the quasi-static and sudden-start critical speeds for '
+        'deflection_limit rad/s, the tip stiffness w0^2 M N/m and its relative deviation '
+        'from the nominal one, the residual m, the window s'),
     pub('/diagnostics', DiagnosticArray, 'WARN near the identified critical speed '
         '(critical_margin), with the stiffness off its nominal value '
         '(stiffness_tolerance), and before the first estimate (with why)'),
@@ -116,11 +113,7 @@ class RigMonitorNode(Node):
             self.get_logger().warning(f'sample rejected: {exc}', throttle_duration_sec=5.0)
             return
         if estimate is not None:
-            msg = Float64MultiArray(data=[float(x) for x in self.monitor.values(estimate)])
-            msg.layout.dim = [MultiArrayDimension(label=ESTIMATE_LABEL,
-                                                  size=len(ESTIMATE_FIELDS),
-                                                  stride=len(ESTIMATE_FIELDS))]
-            self._pub_estimate.publish(msg)
+            self._pub_estimate.publish(messages.rig_estimate(self.monitor, estimate))
             self._diagnose()
 
     def _diagnose(self, force: bool = False) -> None:

@@ -21,8 +21,9 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
+from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64
 from std_srvs.srv import SetBool, Trigger
 
 import rotrod_core.live.scheduling as scheduling
@@ -30,6 +31,7 @@ from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
 from rotrod_core.estimation.whirl import WhirlEstimator
 from rotrod_core.live.engine import EngineConfig, SimulationEngine
 from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
+from rotrod_core.live.publication import SAMPLE_TOPICS
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
 from rotrod_core.model.scene import scene
@@ -56,9 +58,6 @@ must not be dropped, since the setpoint shaper numbers a stream's samples in ord
 LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
 """The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
 rerun_logger) gets every publication, the physics waiting for it when it falls behind."""
-SAMPLE_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
-                 'frequencies/estimate')
-"""The topics published at each sample (the estimate at estimate_rate)."""
 
 INTERFACES = (
     sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity); with '
@@ -68,10 +67,10 @@ INTERFACES = (
         'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
     sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
         "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
-        '(drive torque), by name or as the one entry of a packed field; other joints '
-        'ignored; the same shaping, limits and timeout as cmd/omega and cmd/torque; a '
-        'malformed message is rejected with a warning (docs/ros_integration.md)',
-        COMMAND_QOS_DEPTH),
+        '(drive torque), read by name; other joints ignored; each field must be empty or '
+        'have one entry per name (sensor_msgs/JointState), else the message is rejected '
+        'with a warning and changes nothing; the same shaping, limits and timeout as '
+        'cmd/omega and cmd/torque (docs/ros_integration.md)', COMMAND_QOS_DEPTH),
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
         "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
@@ -81,11 +80,12 @@ INTERFACES = (
         keep_all=LOSSLESS),
     pub('tip/position', messages.PointStamped, "the mass, m, in frame 'world' (inertial; "
         'z = rod length)', keep_all=LOSSLESS),
-    pub('frequencies', Float64MultiArray, '[f1, f2] Hz at the current w (Eq. 28, or the '
-        "eigen analysis); one dimension labelled 'f1_f2_hz'", keep_all=LOSSLESS),
-    pub('frequencies/estimate', Float64MultiArray, '[f1, f2] Hz estimated from the '
-        'published (u, v) over the last estimate_window, every 1/estimate_rate; NaN: no '
-        "estimate; it describes the window's middle", keep_all=LOSSLESS),
+    pub('frequencies', DynamicFrequencies, 'f1 <= f2 Hz at the published w (omega, rad/s; '
+        'Eq. 28, or the eigen analysis), stamped as the sample', keep_all=LOSSLESS),
+    pub('frequencies/estimate', WhirlEstimate, 'f1 (forward whirl), f2 (backward) Hz, '
+        'their standard deviations, whether each is valid and why not, estimated from the '
+        'published (u, v) over the last estimate_window, every 1/estimate_rate; stamped at '
+        "the window's middle, which it describes", keep_all=LOSSLESS),
     pub('markers', messages.MarkerArray, "disk, rod, mass, trail (frame 'world'), at "
         'marker_rate Hz of simulated time'),
     pub('/diagnostics', messages.DiagnosticArray, 'OK / WARN / ERROR with the reason and '
@@ -246,15 +246,17 @@ class SimulatorNode(Node):
         send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque), wait)
         send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
         send('tip/position', messages.set_position(m.position, stamp, s.position), wait)
-        send('frequencies', messages.set_frequencies(m.frequencies, *s.frequencies), wait)
+        send('frequencies', messages.set_frequencies(m.frequencies, stamp, float(st.omega),
+                                                     *s.frequencies), wait)
         io = self._io
         if settings.publishes_clock:
             io['/clock'].publish(messages.clock(stamp))
         if estimator is not None:
             estimate = estimator.push(s.time, u, v)
-            if estimate is not None:
+            if estimate is not None:       # stamped at its window's middle
+                middle = messages.stamp(s.stamp - (s.time - estimate.time))
                 send('frequencies/estimate',
-                     messages.set_frequencies(m.estimate, estimate.f1, estimate.f2), wait)
+                     messages.set_whirl_estimate(m.estimate, middle, estimate), wait)
         if s.markers:
             theta = float(st.theta)
             rod = rod_centerline(config.params, float(st.u), float(st.v), theta,

@@ -1,25 +1,24 @@
-"""The hub's command from a ``joint_command`` message, as ros2_control's topic interface sends it.
+"""The hub's command from a ``joint_command`` message (sensor_msgs/JointState).
 
-``topic_based_ros2_control``'s ``TopicBasedSystem`` (the hardware interface by which a
-ros2_control stack drives a simulator over topics) publishes, at every controller
-update, a ``sensor_msgs/JointState`` whose ``name`` lists every joint of its
-``<ros2_control>`` block in the block's order, and whose ``position``, ``velocity`` and
-``effort`` get one entry for each joint that has that command interface, in the same
-order; a joint without it adds none (``TopicBasedSystem::write``). So a field has either
-one entry per name (every joint has that command interface), or fewer (the packed
-form), or none.
+The contract is sensor_msgs/JointState's: ``position``, ``velocity`` and ``effort``
+are each either empty or one entry per ``name``. A message that breaks it is refused
+whole (the simulator logs a warning, counts it, and changes nothing): with a field of
+another length, which entry belongs to which joint is a guess (e.g. ``name: [hub, x]``,
+``velocity: [3.0]`` could be either joint's).
 
-For the rod, only the ``hub`` joint takes commands: ``velocity`` is an angular-velocity
-setpoint (rad/s, velocity drive), ``effort`` a hub torque (N m, torque drive). The tip
-joints are passive (state interfaces only). Hence:
+For the rod only the ``hub`` joint takes commands: ``velocity`` is an
+angular-velocity setpoint (rad/s, velocity drive), ``effort`` a hub torque (N m,
+torque drive); the hub's entry is the one at its index in ``name``, other joints'
+entries are ignored. The active drive's field must have the hub's entry; the other
+drive's field may be there too (a hub with both command interfaces) and is then
+ignored.
 
-- a field with one entry per name is read by name: the hub's entry is at the hub's
-  index; other joints' entries are ignored;
-- a packed field (fewer entries than names) must have exactly one entry, the hub's:
-  with more, which entry belongs to which joint depends on the other joints' command
-  interfaces, which the message does not say;
-- the active drive's field must have the hub's entry; the other drive's field may be
-  there too (a hub with both command interfaces) and is then ignored.
+``topic_based_ros2_control``'s ``TopicBasedSystem`` (the hardware interface by which
+a ros2_control stack drives a simulator over topics) names every joint of its
+``<ros2_control>`` block and gives a field one entry per joint that has that command
+interface: so its messages keep the contract when every joint in the block has the
+same command interfaces. ``rotrod urdf --ros2-control`` writes a block with the hub
+only (:mod:`rotrod_core.model.urdf`).
 
 :func:`hub_command` returns ``('omega', rad/s)`` or ``('torque', N m)``, or raises
 :class:`MalformedJointCommand` with the reason. No ROS import: the node passes the
@@ -43,22 +42,15 @@ class MalformedJointCommand(ValueError):
     """A joint_command message that cannot be read as a hub command (reason in the text)."""
 
 
-def _hub_entry(field: str, values: Sequence[float], names: Sequence[str], hub: int):
-    """The hub's value in ``field`` (None: none), or MalformedJointCommand."""
-    n, count = len(names), len(values)
-    if count == 0:
-        return None
-    if count == n:
-        return values[hub]
-    if count > n:
-        raise MalformedJointCommand(f'{field} has {count} entries for {n} joint names')
-    if count == 1:
-        return values[0]
-    raise MalformedJointCommand(
-        f'{field} has {count} entries for {n} joint names: in this packed form (only '
-        f'joints with a {field} command interface have an entry) only the one entry of '
-        f"joint '{HUB_JOINT}' can be attributed; give {field} one entry per name, or "
-        f"command interfaces to '{HUB_JOINT}' only")
+def check_lengths(names: Sequence[str], **fields: Sequence[float]) -> None:
+    """MalformedJointCommand unless each field is empty or has one entry per name."""
+    n = len(names)
+    for field, values in fields.items():
+        if len(values) not in (0, n):
+            raise MalformedJointCommand(
+                f'{field} has {len(values)} entries for {n} joint names: a JointState '
+                'field is empty or has one entry per name (which joint an entry belongs to '
+                'would be a guess)')
 
 
 def hub_command(names: Sequence[str], position: Sequence[float], velocity: Sequence[float],
@@ -67,15 +59,16 @@ def hub_command(names: Sequence[str], position: Sequence[float], velocity: Seque
 
     ``names``, ``position``, ``velocity``, ``effort`` are the message's arrays;
     ``drive`` is 'velocity' or 'torque'. Returns ``('omega', w)`` (rad/s) in velocity
-    drive or ``('torque', Q)`` (N m) in torque drive. Raises MalformedJointCommand:
-    no or repeated ``hub`` name, a field whose length fits neither the names nor the
-    packed form, a non-finite value for the hub, or no entry for the hub in the
-    active drive's field (e.g. effort only in velocity drive). Limits (max_omega,
-    max_torque) are the engine's to check.
+    drive or ``('torque', Q)`` (N m) in torque drive. Raises MalformedJointCommand: a
+    field neither empty nor one entry per name (checked first: such a message breaks
+    JointState's contract), no or repeated ``hub`` name, a non-finite value for the
+    hub, or no entry for the hub in the active drive's field (e.g. effort only in
+    velocity drive). Limits (max_omega, max_torque) are the engine's to check.
     """
     if drive not in DRIVE_FIELDS:
         raise ValueError(f'drive must be one of {tuple(DRIVE_FIELDS)}, got {drive!r}')
     names = list(names)
+    check_lengths(names, position=position, velocity=velocity, effort=effort)
     if HUB_JOINT not in names:
         listed = ', '.join(repr(n) for n in names[:8]) or 'none'
         raise MalformedJointCommand(f"no joint '{HUB_JOINT}' in the names (got {listed})")
@@ -85,9 +78,9 @@ def hub_command(names: Sequence[str], position: Sequence[float], velocity: Seque
     hub = names.index(HUB_JOINT)
     entries = {}
     for field, values in zip(FIELDS, (position, velocity, effort)):
-        value = _hub_entry(field, values, names, hub)
-        if value is None:
+        if len(values) == 0:
             continue
+        value = values[hub]
         if not math.isfinite(value):
             raise MalformedJointCommand(f"{field} of joint '{HUB_JOINT}' is {value!r}: "
                                         'it must be finite')

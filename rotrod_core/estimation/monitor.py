@@ -139,6 +139,19 @@ class RigMonitor:
                 stiffness, stiffness / float(c.nominal.stiffness) - 1.0,
                 estimate.residual_rms, estimate.end_time)
 
+    def fields(self, estimate: RigEstimate) -> dict:
+        """The fields of ``rig/estimate`` (rotrod_interfaces/RigEstimate) for ``estimate``.
+
+        :meth:`values` by their :data:`ESTIMATE_FIELDS` names, with the
+        ``deflection_limit`` the critical speeds are for (m) and the ``window`` (s);
+        ``window_end`` (s) is the message's stamp.
+        """
+        out = {name: float(x) for (name, _), x in zip(ESTIMATE_FIELDS, self.values(estimate),
+                                                      strict=True)}
+        out.update(deflection_limit=float(self.config.deflection_limit),
+                   window=float(self.config.window))
+        return out
+
     def health(self) -> Health:
         """OK, or WARN with the reasons.
 

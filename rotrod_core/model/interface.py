@@ -2,7 +2,9 @@
 
 One source for the live node's messages (``rotrod_ros.messages``), the URDF
 (:mod:`rotrod_core.model.urdf`) and the rosbag2 writer of offline runs
-(:mod:`rotrod_core.reporting.bag`), so that a live run, its ``/tf`` and a bag agree.
+(:mod:`rotrod_core.reporting.bag`), so that a live run, its ``/tf`` and a bag agree:
+both build the fields of their messages with the functions here (:func:`joint_values`,
+:func:`frequency_fields`, :func:`whirl_fields`, :func:`stamp_parts`).
 
 Frames (URDF links; ``robot_state_publisher`` turns ``joint_states`` into ``/tf``)::
 
@@ -43,8 +45,8 @@ TIP_TANGENTIAL_JOINT = 'tip_tangential'
 JOINT_NAMES = (HUB_JOINT, TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT)
 """The joints in ``joint_states``, in this order."""
 
-FREQUENCY_LABEL = 'f1_f2_hz'
-"""Label of the single dimension of ``frequencies``: [f1, f2] in Hz, f1 <= f2."""
+INTERFACES_PACKAGE = 'rotrod_interfaces'
+"""The ROS package of rotrod's own messages and action (``rotrod_interfaces/``)."""
 MARKER_NAMESPACE = 'rotrod'
 """The ``ns`` of the markers."""
 
@@ -52,8 +54,8 @@ TOPICS = {
     'joint_states': 'sensor_msgs/msg/JointState',
     'tip/deflection': 'geometry_msgs/msg/Vector3Stamped',
     'tip/position': 'geometry_msgs/msg/PointStamped',
-    'frequencies': 'std_msgs/msg/Float64MultiArray',
-    'frequencies/estimate': 'std_msgs/msg/Float64MultiArray',
+    'frequencies': 'rotrod_interfaces/msg/DynamicFrequencies',
+    'frequencies/estimate': 'rotrod_interfaces/msg/WhirlEstimate',
     'markers': 'visualization_msgs/msg/MarkerArray',
     '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
     '/clock': 'rosgraph_msgs/msg/Clock',
@@ -72,6 +74,34 @@ def joint_values(state, torque: float) -> tuple:
     return ((float(state.theta), float(state.u), float(state.v)),
             (float(state.omega), float(state.du), float(state.dv)),
             (float(torque), 0.0, 0.0))
+
+
+def frequency_fields(omega: float, f1: float, f2: float) -> dict:
+    """The fields of ``frequencies`` (rotrod_interfaces/DynamicFrequencies) but the header.
+
+    ``omega`` the hub's angular velocity, rad/s; ``f1`` <= ``f2`` the dynamic
+    frequencies at it, Hz (Eq. 28 or the eigen analysis).
+    """
+    return {'omega': float(omega), 'f1': float(f1), 'f2': float(f2)}
+
+
+def whirl_fields(estimate) -> dict:
+    """The fields of ``frequencies/estimate`` (rotrod_interfaces/WhirlEstimate) but the header.
+
+    ``estimate`` is a :class:`rotrod_core.estimation.whirl.WhirlEstimate`: f1 the
+    forward whirl, f2 the backward one, Hz, with their standard deviations; a whirl
+    is valid when its frequency is finite (NaN otherwise, with the estimate's reason).
+    The header's stamp is the window's middle, ``estimate.time``.
+    """
+    f1, f2 = float(estimate.f1), float(estimate.f2)
+    f1_valid, f2_valid = math.isfinite(f1), math.isfinite(f2)
+    nan = math.nan
+    return {'f1': f1, 'f2': f2,
+            'f1_std': float(estimate.forward.frequency_std) if f1_valid else nan,
+            'f2_std': float(estimate.backward.frequency_std) if f2_valid else nan,
+            'f1_valid': f1_valid, 'f2_valid': f2_valid,
+            'reason': '' if f1_valid and f2_valid else str(estimate.reason),
+            'window': float(estimate.window), 'samples': int(estimate.samples)}
 
 
 def stamp_parts(seconds: float) -> tuple:

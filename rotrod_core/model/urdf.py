@@ -103,11 +103,13 @@ class Ros2Control:
 def ros2_control_block(options: Ros2Control) -> str:
     """The ``<ros2_control>`` element (XML text, indented for the robot element).
 
-    Joint ``hub``: the command interfaces asked for; state interfaces position (theta,
-    rad), velocity (w, rad/s), effort (hub torque, N m). The tip joints (passive):
-    state interfaces position and velocity (u, v m; u', v' m/s), no command interface,
-    so ``joint_state_broadcaster`` republishes them for ``/tf`` and the interface's
-    commands carry one entry per field, the hub's.
+    Joint ``hub`` only: the command interfaces asked for; state interfaces position
+    (theta, rad), velocity (w, rad/s), effort (hub torque, N m). The passive tip joints
+    are left out: ``TopicBasedSystem`` names every joint of its block in its commands but
+    gives a field entries only for the joints with that command interface, which would
+    break sensor_msgs/JointState's contract (a field empty or one entry per name) that
+    the simulator holds ``joint_command`` to. Their state (u, v for ``/tf``) is in the
+    simulator's ``joint_states`` for ``robot_state_publisher``.
     """
     params = (('joint_commands_topic', options.joint_commands_topic),
               ('joint_states_topic', options.joint_states_topic),
@@ -121,13 +123,8 @@ def ros2_control_block(options: Ros2Control) -> str:
              *(f'      <command_interface name="{c}"/>' for c in options.command_interfaces),
              *(f'      <state_interface name="{s}"/>' for s in ('position', 'velocity',
                                                                   'effort')),
-             '    </joint>']
-    for joint in (TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT):
-        lines += [f'    <joint name="{joint}">',
-                  '      <state_interface name="position"/>',
-                  '      <state_interface name="velocity"/>',
-                  '    </joint>']
-    lines.append('  </ros2_control>')
+             '    </joint>',
+             '  </ros2_control>']
     return '\n'.join(lines) + '\n'
 
 

@@ -2,10 +2,15 @@
 
 ``rotrod simulate ... --bag DIR`` writes the run as the live simulator would have
 published it at ``publish_rate``, faster than real time (stamps in simulated seconds
-from 0, as with ``/clock``): the same topics, types, frame ids, joint names, labels and
-stamps, built from the same sources (:mod:`rotrod_core.model.interface`,
+from 0, as with ``/clock``): the same topics, types, frame ids, joint names and stamps,
+with the same settings (:class:`~rotrod_core.live.publication.PublicationSettings`, the
+node's) and fields built by the same functions (:mod:`rotrod_core.model.interface`,
 :mod:`rotrod_core.model.scene`), so that ``ros2 bag play DIR`` replays it beside a live
-run and Foxglove or Rerun open it. Each message's log time is its stamp.
+run and Foxglove or Rerun open it. Each message's log time is its publication's instant,
+its stamp but for the estimate's (its window's middle). rotrod's own
+types (``rotrod_interfaces``) are registered with rosbags from their ``.msg`` files
+(:func:`interface_definitions`), so the bag carries their definitions and type hashes
+and any reader decodes them.
 
 Topics (names relative to ``namespace``, as the node's; types as
 :data:`~rotrod_core.model.interface.TOPICS`):
@@ -13,8 +18,9 @@ Topics (names relative to ``namespace``, as the node's; types as
     joint_states           hub theta, w, hub torque; tip_radial, tip_tangential u, v, u', v'
     tip/deflection         (u, v, 0) m in frame ``rotor`` (no sensor noise: the state)
     tip/position           the mass in frame ``world``, m
-    frequencies            [f1, f2] Hz at the sample's w (Eq. 28 / eigen analysis)
-    frequencies/estimate   the whirl estimate from the published (u, v), as the node's
+    frequencies            f1, f2 Hz at the sample's w, with w (Eq. 28 / eigen analysis)
+    frequencies/estimate   the whirl estimate from the published (u, v), as the node's,
+                           stamped at its window's middle
     markers                disk, rod, mass, trail at ``marker_rate`` (``markers=False``: none)
     /clock                 simulated time at each publication
 
@@ -27,9 +33,10 @@ written, not with this module, so the core does not need it.
 
 from __future__ import annotations
 
+import os
 import shutil
+import sys
 from collections import deque
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
@@ -37,10 +44,10 @@ import numpy as np
 
 from rotrod_core.analysis.modes import dynamic_frequencies
 from rotrod_core.estimation.whirl import stream_estimator
+from rotrod_core.live.publication import SAMPLE_TOPICS, PublicationSettings
 from rotrod_core.model import interface
 from rotrod_core.model.equations import State
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
-from rotrod_core.model.params import DEFAULT_HUB_RADIUS
 from rotrod_core.model.scene import scene
 
 STORAGE = 'mcap'
@@ -50,53 +57,45 @@ QOS_DEPTH = 10
 """History depth of the node's publishers (reliable, volatile: rclpy's default)."""
 INFINITE = (9223372036, 854775807)
 """rmw's infinite duration (sec, nsec), as ``ros2 bag record`` writes a default QoS."""
-BAG_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
-              'frequencies/estimate', 'markers', '/clock')
-"""The node's topics a bag holds, in the order the node publishes one sample's."""
+BAG_TOPICS = (*SAMPLE_TOPICS, 'markers', '/clock')
+"""The node's topics a bag holds."""
+SOURCE_INTERFACES = Path(__file__).resolve().parents[2] / interface.INTERFACES_PACKAGE
+"""The interface package's sources in a checkout (used when none is installed)."""
 
 
-@dataclass(frozen=True)
-class BagSettings:
-    """How the run is published; the defaults are the simulator node's parameters'."""
+def check_namespace(namespace: str) -> str:
+    """``namespace``, or ValueError unless it starts with /."""
+    if not namespace.startswith('/'):
+        raise ValueError(f'namespace must start with /, got {namespace!r}')
+    return namespace
 
-    publish_rate: float = 100.0
-    """Publications per second of simulated time, Hz (a whole number of run steps)."""
-    markers: bool = True
-    marker_rate: float = 20.0
-    """Hz of simulated time (every round(publish_rate / marker_rate)-th publication)."""
-    marker_trail_length: int = 200
-    marker_deflection_scale: float = 20.0
-    disk_radius: float = DEFAULT_HUB_RADIUS
-    """m, as drawn."""
-    estimate_window: float = 1.0
-    """s; 0 = no frequencies/estimate."""
-    estimate_rate: float = 10.0
-    """Hz of simulated time."""
-    clock: bool = True
-    """Write /clock."""
-    frame_prefix: str = ''
-    """Prefix of the frame ids world and rotor (e.g. 'rod1/'), as the node's parameter."""
-    namespace: str = '/'
-    """Namespace of the topics (e.g. '/offline', to play beside a live run in /)."""
 
-    def __post_init__(self):
-        for name in ('publish_rate', 'marker_rate', 'estimate_rate'):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
-                raise ValueError(f'{name} must be a finite number > 0 Hz, got {value!r}')
-        if not (np.isfinite(self.estimate_window) and self.estimate_window >= 0):
-            raise ValueError(f'estimate_window must be >= 0 s, got {self.estimate_window!r}')
-        if self.estimate_rate > self.publish_rate:
-            raise ValueError(f'estimate_rate {self.estimate_rate:g} Hz exceeds publish_rate '
-                             f'{self.publish_rate:g} Hz')
-        if not self.namespace.startswith('/'):
-            raise ValueError(f'namespace must start with /, got {self.namespace!r}')
+def topic_name(namespace: str, name: str) -> str:
+    """The full name of one of the node's topics in ``namespace`` (which starts with /)."""
+    check_namespace(namespace)
+    if name.startswith('/'):
+        return name
+    return '/'.join(['', *[p for p in namespace.split('/') if p], name])
 
-    def topic(self, name: str) -> str:
-        """The full topic name of one of the node's topics."""
-        if name.startswith('/'):
-            return name
-        return '/'.join(['', *[p for p in self.namespace.split('/') if p], name])
+
+def interface_definitions() -> dict:
+    """``{'rotrod_interfaces/msg/Name': .msg text}`` of rotrod's messages.
+
+    From the installed package (``share/rotrod_interfaces/msg`` under each
+    AMENT_PREFIX_PATH entry, then under this Python's prefix, where run.sh builds it),
+    else from the sources beside this package (a checkout). Raises FileNotFoundError.
+    """
+    package = interface.INTERFACES_PACKAGE
+    prefixes = [Path(p) for p in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep)
+                if p] + [Path(sys.prefix)]
+    places = [prefix / 'share' / package / 'msg' for prefix in prefixes]
+    places.append(SOURCE_INTERFACES / 'msg')
+    for place in places:
+        files = sorted(place.glob('*.msg'))
+        if files:
+            return {f'{package}/msg/{f.stem}': f.read_text() for f in files}
+    raise FileNotFoundError(f'no {package} message definitions in '
+                            f'{", ".join(str(p) for p in places)}')
 
 
 def publication_indices(t: np.ndarray, publish_rate: float) -> np.ndarray:
@@ -120,8 +119,10 @@ class _Messages:
 
     def __init__(self):
         from rosbags.interfaces import Nodetype
-        from rosbags.typesys import Stores, get_typestore
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
         self.store = get_typestore(Stores.ROS2_JAZZY)
+        for name, text in interface_definitions().items():
+            self.store.register(get_types_from_msg(text, name))
         self._nodetype = Nodetype
 
     def make(self, msgtype: str, **fields):
@@ -181,12 +182,13 @@ class _Messages:
         return self.make('geometry_msgs/msg/PointStamped', header=self.header(stamp, frame_id),
                          point=self.point(xyz))
 
-    def frequencies(self, f1: float, f2: float):
-        dim = self.make('std_msgs/msg/MultiArrayDimension', label=interface.FREQUENCY_LABEL,
-                        size=2, stride=2)
-        layout = self.make('std_msgs/msg/MultiArrayLayout', dim=[dim], data_offset=0)
-        return self.make('std_msgs/msg/Float64MultiArray', layout=layout,
-                         data=np.array([float(f1), float(f2)]))
+    def frequencies(self, stamp, omega: float, f1: float, f2: float):
+        return self.make(interface.TOPICS['frequencies'], header=self.header(stamp),
+                         **interface.frequency_fields(omega, f1, f2))
+
+    def whirl_estimate(self, stamp, estimate):
+        return self.make(interface.TOPICS['frequencies/estimate'], header=self.header(stamp),
+                         **interface.whirl_fields(estimate))
 
     def clock(self, stamp):
         return self.make('rosgraph_msgs/msg/Clock', clock=stamp)
@@ -227,15 +229,20 @@ def _qos():
                False)
 
 
-def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dict:
+def write_bag(path: str | Path, run, settings: PublicationSettings | None = None, *,
+              namespace: str = '/', clock: bool = True) -> dict:
     """Write an offline run (:class:`~rotrod_core.offline.result.SimulationResult`).
 
-    ``path`` is the bag's directory (it must not exist: rosbag2 does not overwrite).
-    Returns the number of messages per full topic name.
+    ``path`` is the bag's directory (it must not exist: rosbag2 does not overwrite);
+    ``settings`` the publication's, as the node's (default: the node's defaults);
+    ``namespace`` the topics' (e.g. '/offline', to play beside a live run in /);
+    ``clock`` whether to write /clock. Returns the number of messages per full topic
+    name.
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
 
-    settings = settings or BagSettings()
+    settings = settings or PublicationSettings()
+    check_namespace(namespace)
     path = Path(path)
     if path.exists():
         raise ValueError(f'{path} exists: a bag is written into a new directory')
@@ -260,9 +267,9 @@ def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dic
     try:
         topics = [t for t in BAG_TOPICS if (t != 'markers' or settings.markers)
                   and (t != 'frequencies/estimate' or estimator is not None)
-                  and (t != '/clock' or settings.clock)]
+                  and (t != '/clock' or clock)]
         qos = _qos()
-        connections = {t: writer.add_connection(settings.topic(t), interface.TOPICS[t],
+        connections = {t: writer.add_connection(topic_name(namespace, t), interface.TOPICS[t],
                                                 typestore=msgs.store, offered_qos_profiles=[qos])
                        for t in topics}
         counts = dict.fromkeys(topics, 0)
@@ -284,13 +291,13 @@ def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dic
             write('tip/deflection', ns, msgs.deflection(stamp, u, v, rotor))
             write('tip/position', ns, msgs.position(stamp, (run.x[i], run.y[i], height),
                                                     world))
-            write('frequencies', ns, msgs.frequencies(f1[j], f2[j]))
+            write('frequencies', ns, msgs.frequencies(stamp, omega, f1[j], f2[j]))
             write('/clock', ns, msgs.clock(stamp))
             if estimator is not None:
                 estimate = estimator.push(t, u, v)
-                if estimate is not None:
+                if estimate is not None:       # stamped at its window's middle
                     write('frequencies/estimate', ns,
-                          msgs.frequencies(estimate.f1, estimate.f2))
+                          msgs.whirl_estimate(msgs.time(estimate.time), estimate))
             if settings.markers and (j + 1) % marker_every == 0:
                 rod = rod_centerline(run.params, u, v, theta,
                                      scale=settings.marker_deflection_scale)
@@ -303,4 +310,4 @@ def write_bag(path: str | Path, run, settings: BagSettings | None = None) -> dic
         shutil.rmtree(path, ignore_errors=True)     # no half-written bag left behind
         raise
     writer.close()
-    return {settings.topic(t): n for t, n in counts.items()}
+    return {topic_name(namespace, t): n for t, n in counts.items()}

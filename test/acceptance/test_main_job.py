@@ -57,10 +57,10 @@ def test_the_main_job_end_to_end(tmp_path):
     assert dv <= 0.05 * np.max(np.abs(offline.v))
     _, f = recording.read_series(out, recording.F_MODEL)
     assert f.shape[1] == 2
-    # the estimate from the motion, stamped at the end of its 1 s window, tracks Eq. 28
-    # at the window's middle during the spin-up once the window has filled (issue 6: 2 %)
+    # the estimate from the motion, stamped at the middle of its 1 s window, tracks
+    # Eq. 28 there during the spin-up once the window has filled (issue 6: 2 %)
     te, fe = recording.read_series(out, recording.F_ESTIMATE)
-    middle = te - shift - 0.5
+    middle = te - shift
     spin_up = (middle >= 0.5) & (middle <= 14.5)
     w0 = RodParams().natural_frequency
     w_mid = profile.omega(middle[spin_up])

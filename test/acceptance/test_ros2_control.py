@@ -2,10 +2,13 @@
 
 Commands are sent as topic_based_ros2_control's TopicBasedSystem sends them
 (``TopicBasedSystem::write``): a sensor_msgs/JointState on the simulator's
-``joint_command`` with every joint of the <ros2_control> block in ``name`` (in the
-block's order, here shuffled), one ``velocity`` or ``effort`` entry per joint with that
-command interface, at the controller manager's update rate, with QoS depth 1
-(reliable). The motion is checked against closed forms: velocity drive ramps w at
+``joint_command`` with every joint of the <ros2_control> block in ``name`` (the hub
+alone, as ``rotrod urdf --ros2-control`` writes it; other stacks' joints too, in any
+order), one ``velocity`` or ``effort`` entry per joint with that command interface, at
+the controller manager's update rate, with QoS depth 1 (reliable). Each field is empty
+or has one entry per name (sensor_msgs/JointState's contract); a message that breaks
+it (the issue's ``name: [hub, x]``, ``velocity: [3.0]``) is refused. The motion is
+checked against closed forms: velocity drive ramps w at
 max_angular_acceleration to the setpoint, as cmd/omega does; in torque drive the
 angular momentum about the axis (from joint_states' hub and tip joints, no finite
 differences) grows by the torque's integral. Malformed messages are rejected with a
@@ -109,9 +112,8 @@ def test_velocity_commands_as_the_interface_sends_them_ramp_w_as_cmd_omega_does(
     diags = ros_node.subscribe('/diagnostics', DiagnosticArray, qos=100)
     pub = command_publisher(ros_node, ns)
     w1, w2 = 0.5, 0.25
-    # a block where only hub has a velocity command interface: one entry, names shuffled
-    packed = ['tip_radial', 'hub', 'tip_tangential']
-    stream(ros_node, pub, lambda k: command(packed, velocity=[w1]), 10.0,
+    # the block rotrod urdf writes: the hub alone
+    stream(ros_node, pub, lambda k: command(['hub'], velocity=[w1]), 10.0,
            until=lambda: hub_velocity_held(joint, w1, 0.4))
     # every joint with a velocity interface: one entry per name, read by name
     full = ['tip_tangential', 'tip_radial', 'hub']
@@ -137,14 +139,17 @@ def test_velocity_commands_as_the_interface_sends_them_ramp_w_as_cmd_omega_does(
     assert np.max(w) == w1 and np.min(w[t > td[-1]]) == w2
 
     # malformed messages interleaved with the stream: rejected, counted, logged
-    bad = [command(packed, effort=[0.1]),                     # the inactive drive's field
-           command(packed, velocity=[math.nan]),               # not finite
+    packed = ['tip_radial', 'hub', 'tip_tangential']
+    bad = [command(['hub'], effort=[0.1]),                    # the inactive drive's field
+           command(['hub'], velocity=[math.nan]),              # not finite
            command(['hub'], velocity=[1.0, 2.0]),              # lengths do not match
            command(['tip_radial', 'tip_tangential'], velocity=[1.0, 1.0]),   # no hub
-           command(packed, velocity=[1.0, 2.0])]               # packed, not attributable
+           command(packed, velocity=[1.0, 2.0]),               # lengths do not match
+           command(['hub', 'x'], velocity=[3.0]),              # the issue's: whose is 3.0?
+           command(packed, velocity=[3.0])]                    # the same, three names
     n = len(joint)
     stream(ros_node, pub, lambda k: bad[k // 20] if k % 20 == 10 else
-           command(packed, velocity=[w2]), len(bad) * 0.2)
+           command(['hub'], velocity=[w2]), len(bad) * 0.2)
     ros_node.spin_until(lambda: malformed_count(diags, ns) == len(bad), 5,
                         'malformed_commands in /diagnostics')
     assert all(m.velocity[0] == w2 for m in joint[n:])
@@ -164,9 +169,9 @@ def test_effort_commands_as_the_interface_sends_them_add_the_torques_integral_to
     joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
     pub = command_publisher(ros_node, ns)
     names = ['tip_tangential', 'hub', 'tip_radial']          # any order; other joints
-    stream(ros_node, pub, lambda k: command(names, effort=[Q]), 0.2)
+    stream(ros_node, pub, lambda k: command(names, effort=[0.0, Q, 0.0]), 0.2)
     # a hub with both command interfaces: the active drive's field (effort) counts
-    stream(ros_node, pub, lambda k: command(names, velocity=[3.0], effort=[Q]), 0.2)
+    stream(ros_node, pub, lambda k: command(['hub'], velocity=[3.0], effort=[Q]), 0.2)
     ros_node.spin_until(lambda: joint and joint[-1].effort[0] == Q, 5, 'torque applied')
     t_on = stamp(joint[-1])
     ros_node.spin_until(lambda: stamp(joint[-1]) > t_on + 8.0, 30, '8 s of spin-up')

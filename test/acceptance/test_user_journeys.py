@@ -29,8 +29,9 @@ from node_probes import (
 )
 from reference import ECCENTRIC_MASS_RIG, K_RIG, MODAL_MASS_RIG, R0, W0, W0_RIG, K, M
 from ros_harness import ros_arguments
+from rotrod_interfaces.msg import DynamicFrequencies
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64
 from std_srvs.srv import SetBool, Trigger
 
 pytestmark = pytest.mark.ros
@@ -90,7 +91,8 @@ class Observer:
         self.node, self.ns = node, ns
         self.joint = node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
         self.deflection = node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
-        self.frequencies = node.subscribe(f'{ns}/frequencies', Float64MultiArray, qos=1000)
+        self.frequencies = node.subscribe(f'{ns}/frequencies', DynamicFrequencies,
+                                          qos=1000)
         self.diags = node.subscribe('/diagnostics', DiagnosticArray, qos=1000)
 
     def rows(self):
@@ -148,7 +150,8 @@ def check_settled_at_2_rad_s(sim, obs, t_reached):
     assert us == pytest.approx(2.792e-3, rel=1e-3)
     assert centre.real == pytest.approx(us, rel=0.01)             # the 1 %
     assert abs(centre - us) <= 1e-3 * us and residual < 1e-3      # two Eq. 28 whirls
-    f1, f2 = obs.frequencies[-1].data
+    f1, f2 = obs.frequencies[-1].f1, obs.frequencies[-1].f2
+    assert obs.frequencies[-1].omega == 2.0
     assert (f1, f2) == (pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-9),
                         pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-9))
     # the whirl carries the tip past the 3 mm criterion: an alarm, not a halt
@@ -397,6 +400,7 @@ def test_the_real_rig_params_file_settles_at_its_softened_static_deflection(
     assert coef[0].real == pytest.approx(us, rel=0.01)
     assert residual < 1e-3 * (abs(coef[1]) + abs(coef[2]))
     assert us > static_deflection(1.5) * 1.3                      # softer than the paper's
-    f1, f2 = obs.frequencies[-1].data
+    f1, f2 = obs.frequencies[-1].f1, obs.frequencies[-1].f2
+    assert obs.frequencies[-1].omega == 1.5
     assert (f1, f2) == (pytest.approx((w0 - 1.5) / (2 * math.pi), rel=1e-6),
                         pytest.approx((w0 + 1.5) / (2 * math.pi), rel=1e-6))

@@ -15,6 +15,10 @@ sourced) and from a directory outside the repository:
 * ``share/rotrod/package.xml``, ``share/rotrod/config/`` (with every ``config/*.yaml``),
   ``share/rotrod/urdf/rotrod.urdf`` and the ament resource marker
   ``share/ament_index/resource_index/packages/rotrod`` exist.
+
+And the message package: with ``rotrod_interfaces/`` named as a base path too, colcon
+builds it (ament_cmake, with the venv's ament and rosidl wheels standing in for a ROS
+install) before ``rotrod``, and its messages import from the install tree.
 """
 
 import configparser
@@ -278,3 +282,44 @@ def test_console_scripts_installed_and_run(colcon_install):
         for mod, path in probe['modules'].items():
             if path is not None:
                 assert _under(path, prefix), f'{name}: {mod} imported from {path}'
+
+
+def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
+    """``colcon build --base-paths src src/rotrod/rotrod_interfaces`` (docs/usage.md):
+    both packages, in dependency order, with this venv as the ROS install (its ament
+    and rosidl build wheels, cmake and ninja, as tools/build_interfaces.py sets them
+    up); the installed messages import from the install tree and serialize."""
+    ws = tmp_path / 'ws'
+    src = ws / 'src' / PACKAGE
+    for rel in source_files():
+        (src / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(ROOT / rel, src / rel)
+    venv = Path(sys.prefix)
+    env = dict(os.environ, COLCON_HOME=str(tmp_path / 'colcon_home'),
+               PATH=f'{venv / "bin"}{os.pathsep}{os.environ.get("PATH", "")}',
+               AMENT_PREFIX_PATH=str(venv), CMAKE_PREFIX_PATH=str(venv))
+    cmd = [str(venv / 'bin' / 'colcon'), '--log-base', str(ws / 'log'), 'build',
+           '--base-paths', 'src', f'src/{PACKAGE}/rotrod_interfaces',
+           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
+           '--cmake-args', '-G', 'Ninja', f'-DPython3_EXECUTABLE={sys.executable}',
+           '-DBUILD_TESTING=OFF']
+    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True, timeout=900,
+                          check=False)
+    output = proc.stdout + proc.stderr
+    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
+    order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', output)]
+    assert order == ['rotrod_interfaces', PACKAGE]                  # rotrod depends on it
+    prefix = ws / 'install' / 'rotrod_interfaces'
+    site = next(prefix.glob('lib/python3*/site-packages'))
+    check = ('import rotrod_interfaces.msg as m, rotrod_interfaces.action as a\n'
+             'from rclpy.serialization import serialize_message as s\n'
+             'print(m.__file__); s(m.WhirlEstimate(f1=1.5)); print(a.SpinUp.Goal.PLANNED)')
+    run_env = dict(os.environ, PYTHONPATH=str(site),
+                   LD_LIBRARY_PATH=f'{prefix / "lib"}{os.pathsep}'
+                                   f'{os.environ.get("LD_LIBRARY_PATH", "")}')
+    run_env.pop('_ROS_WHEELS_BOOTSTRAP_COMPLETE', None)
+    done = subprocess.run([sys.executable, '-c', check], cwd=tmp_path, env=run_env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    first, second = done.stdout.split()
+    assert first.startswith(str(site)) and second == 'planned'

@@ -22,8 +22,8 @@ ROOT = Path(__file__).resolve().parents[2]
 CORE = 'rotrod_core'
 
 REQUIRED_EXEC_DEPENDS = {
-    'rclpy', 'std_msgs', 'geometry_msgs', 'sensor_msgs', 'std_srvs', 'visualization_msgs',
-    'diagnostic_msgs', 'rosgraph_msgs', 'python3-numpy', 'python3-scipy',
+    'rclpy', 'rotrod_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs', 'std_srvs',
+    'visualization_msgs', 'diagnostic_msgs', 'rosgraph_msgs', 'python3-numpy', 'python3-scipy',
 }
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 # PyPI name (lower case) -> rosdep key, where it is not simply python3-<name>.

@@ -1,8 +1,11 @@
 """The messages the nodes publish: stamps, units, frames and labels."""
 
+import math
+
 import pytest
 
 from rotrod_core import RodParams
+from rotrod_core.estimation.whirl import Whirl, WhirlEstimate
 from rotrod_core.model.equations import State
 from rotrod_core.model.geometry import rod_centerline
 from rotrod_ros import messages
@@ -25,12 +28,21 @@ def test_messages_carry_units_frames_and_labels():
     d = messages.deflection(t, 1e-3, -2e-4, 'rotor')
     assert d.header.frame_id == 'rotor' and (d.vector.x, d.vector.y, d.vector.z) == (
         1e-3, -2e-4, 0.0)
-    f = messages.frequencies(1.6, 2.2)
-    assert list(f.data) == [1.6, 2.2] and f.layout.dim[0].label == messages.FREQUENCY_LABEL
+    f = messages.frequencies(t, 2.0, 1.6, 2.2)
+    assert (f.omega, f.f1, f.f2) == (2.0, 1.6, 2.2) and f.header.stamp == t
     diag = messages.diagnostics(t, 'sim', 'hw', 1, 'warn', [('u_m', 1e-3), ('drive', 'x')])
     assert diag.status[0].level == b'\x01'
     assert [(kv.key, kv.value) for kv in diag.status[0].values] == [('u_m', '0.001'),
                                                                    ('drive', 'x')]
+    # a whirl estimate: the forward whirl found, the backward one not, and why
+    e = WhirlEstimate(forward=Whirl(frequency=1.6, frequency_std=1e-4),
+                      backward=Whirl(frequency=math.nan, frequency_std=0.5), time=0.75,
+                      window=0.99, samples=100, reason='backward: too weak')
+    w = messages.whirl_estimate(messages.stamp(e.time), e)
+    assert (w.f1, w.f1_std, w.f1_valid) == (1.6, 1e-4, True)
+    assert math.isnan(w.f2) and math.isnan(w.f2_std) and not w.f2_valid
+    assert (w.reason, w.window, w.samples) == ('backward: too weak', 0.99, 100)
+    assert messages.to_seconds(w.header.stamp) == 0.75
     rod = rod_centerline(RodParams(), 1e-3, 0.0, 0.3)
     arr = messages.markers(t, 'world', 'rotrod', disk_radius=0.15, theta=0.3, rod=rod,
                            rod_diameter=0.003, mass_radius=0.02, trail=[rod[-1], rod[-1]])
@@ -71,5 +83,12 @@ def test_sample_messages_written_anew_equal_fresh_messages():
             messages.deflection(t, 1e-3 * k, 2e-4, 'rod1/rotor')
         assert messages.set_position(m.position, t, (0.1, 0.2 * k, 0.3)) == \
             messages.position(t, (0.1, 0.2 * k, 0.3), 'rod1/world')
-        assert messages.set_frequencies(m.estimate, 1.5, 2.0 + k) == \
-            messages.frequencies(1.5, 2.0 + k)
+        assert messages.set_frequencies(m.frequencies, t, 0.5 * k, 1.5, 2.0 + k) == \
+            messages.frequencies(t, 0.5 * k, 1.5, 2.0 + k)
+        e = WhirlEstimate(forward=Whirl(frequency=1.5 + k, frequency_std=1e-3), time=0.5 * k,
+                          window=0.99, samples=100 + k, reason='backward: weak')
+        reused, fresh = messages.set_whirl_estimate(m.estimate, t, e), \
+            messages.whirl_estimate(t, e)
+        for name in fresh.get_fields_and_field_types():           # NaN != NaN
+            a, b = getattr(reused, name), getattr(fresh, name)
+            assert a == b or (a != a and b != b), name

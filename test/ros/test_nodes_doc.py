@@ -86,6 +86,8 @@ def test_each_node_declares_its_specs_and_creates_its_interfaces(executable, con
     _, module, specs, read_only = next(n for n in nodes_doc.NODES if n[0] == executable)
     overrides = [Parameter('output', value=str(tmp_path / 'x.rrd'))] if (
         executable == 'rerun_logger') else []
+    if executable == 'profile_publisher':        # every interface: the action's too
+        overrides = [Parameter('serve_spin_up', value=True)]
     node = NODE_CLASSES[executable](context=context, parameter_overrides=overrides)
     try:
         declared = set(node._parameters) - {'use_sim_time', 'start_type_description_service'}
@@ -103,10 +105,13 @@ def test_each_node_declares_its_specs_and_creates_its_interfaces(executable, con
         ns = node.get_namespace().rstrip('/')
         # topics by their resolved name, services (rclpy keeps it) by the one given
         want = {i.name if i.kind == 'srv' or i.name.startswith('/') else f'{ns}/{i.name}'
-                for i in module.INTERFACES}
+                for i in module.INTERFACES if i.kind != 'action'}
         made = {x.topic_name for x in (*node.publishers, *node.subscriptions)} | {
             x.srv_name for x in node.services}
         assert {m for m in made if not builtin(m)} == want
+        from rclpy.action import ActionServer
+        actions = [w._action_type for w in node.waitables if isinstance(w, ActionServer)]
+        assert actions == [i.type for i in module.INTERFACES if i.kind == 'action']
     finally:
         node.destroy_node()
 

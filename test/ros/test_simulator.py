@@ -23,8 +23,9 @@ from node_probes import (
     start_simulator,
 )
 from reference import R0, W0, K, M, eq26
+from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64
 from std_srvs.srv import SetBool, Trigger
 
 from rotrod_core import Eq26Profile, RodParams, simulate
@@ -42,7 +43,7 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
     start_simulator(ros_processes, ns, real_time_factor=FAST, deflection_limit=0.005)
     joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
     defl = ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
-    freq = ros_node.subscribe(f'{ns}/frequencies', Float64MultiArray, qos=1000)
+    freq = ros_node.subscribe(f'{ns}/frequencies', DynamicFrequencies, qos=1000)
     omega_publisher(ros_node, ns).publish(Float64(data=2.0))
     ros_node.spin_until(lambda: joint and joint[-1].velocity[0] == 2.0, 30,
                         'joint_states velocity 2 rad/s')
@@ -54,11 +55,22 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
     u_static = M * 4.0 * R0 / (K - M * 4.0)       # docs/model.md u_s = m w^2 r0 / (k - m w^2)
     assert hann_mean(hold[:, 4]) == pytest.approx(u_static, rel=0.01)
     assert hann_mean(hold[:, 4]) == pytest.approx(2.792e-3, rel=0.01)
-    f1, f2 = freq[-1].data
+    f1, f2 = freq[-1].f1, freq[-1].f2
+    assert freq[-1].omega == 2.0
     assert f1 == pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-3)       # Eq. 28
     assert f2 == pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-3)
     assert (f1, f2) == (pytest.approx(1.6131, rel=1e-3), pytest.approx(2.2497, rel=1e-3))
-    assert freq[-1].layout.dim[0].label and freq[-1].layout.dim[0].size == 2
+    # every message, through the ramp: Eq. 28 at its own w, which is the w that
+    # joint_states published with the same stamp
+    w_at = {(m.header.stamp.sec, m.header.stamp.nanosec): m.velocity[0] for m in joint}
+    paired = [m for m in freq if (m.header.stamp.sec, m.header.stamp.nanosec) in w_at]
+    assert len(paired) > 0.9 * len(freq) > 1000
+    assert len({m.omega for m in paired}) > 100                   # through the ramp
+    for m in paired:
+        assert m.omega == w_at[(m.header.stamp.sec, m.header.stamp.nanosec)]
+        assert m.f1 == pytest.approx((W0 - m.omega) / (2 * math.pi), rel=1e-9, abs=1e-12)
+        assert m.f2 == pytest.approx((W0 + m.omega) / (2 * math.pi), rel=1e-9)
+        assert m.header.frame_id == ''
 
 
 def test_eq26_streamed_at_100_hz_matches_the_offline_run(ros_processes, ros_node, request):
@@ -274,21 +286,28 @@ def test_frequency_estimate_from_the_motion_matches_eq28_and_is_nan_at_rest(
     start_simulator(ros_processes, ns, real_time_factor=FAST, deflection_limit=0.005,
                     estimate_window=1.0, estimate_rate=5.0)
     joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
-    estimate = ros_node.subscribe(f'{ns}/frequencies/estimate', Float64MultiArray, qos=1000)
+    estimate = ros_node.subscribe(f'{ns}/frequencies/estimate', WhirlEstimate, qos=1000)
     ros_node.spin_until(lambda: len(estimate) >= 3, 30, 'estimates at rest')
-    assert all(math.isnan(f) for m in estimate for f in m.data)   # no motion: no estimate
-    assert estimate[-1].layout.dim[0].size == 2
+    for m in estimate:                                  # no motion: no estimate, and why
+        assert math.isnan(m.f1) and math.isnan(m.f2) and math.isnan(m.f1_std)
+        assert not m.f1_valid and not m.f2_valid and m.reason
+        assert m.window == pytest.approx(1.0, abs=0.011) and m.samples >= 90
     omega_publisher(ros_node, ns).publish(Float64(data=2.0))
     ros_node.spin_until(lambda: joint and joint[-1].velocity[0] == 2.0, 30, 'w = 2 rad/s')
     t_reached = stamp(joint[-1])
     n = len(estimate)
     # a window that starts after the ramp has ended sees constant w: Eq. 28
     ros_node.spin_until(lambda: stamp(joint[-1]) > t_reached + 3.0, 30, '3 s of hold')
-    late = [m.data for m in estimate[n + 8:]]        # 5 Hz: windows wholly in the hold
+    late = [m for m in estimate[n + 8:]]             # 5 Hz: windows wholly in the hold
     assert len(late) >= 3
-    for f1, f2 in late:
-        assert f1 == pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-3)
-        assert f2 == pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-3)
+    for m in late:
+        assert m.f1_valid and m.f2_valid and m.reason == ''
+        assert m.f1 == pytest.approx((W0 - 2.0) / (2 * math.pi), rel=1e-3)
+        assert m.f2 == pytest.approx((W0 + 2.0) / (2 * math.pi), rel=1e-3)
+        assert 0 < m.f1_std < 1e-3 * m.f1 and 0 < m.f2_std < 1e-3 * m.f2
+        # stamped at the window's middle: half a window before the last sample in it
+        published = [j for j in joint if stamp(j) <= stamp(m) + 0.5 + 1e-6]
+        assert stamp(published[-1]) == pytest.approx(stamp(m) + 0.5, abs=0.011)
 
 
 def fifo_threads(pid):

@@ -1,6 +1,6 @@
-"""Reading the hub's command from joint_command messages shaped as topic_based_ros2_control
-sends them (TopicBasedSystem::write: every joint of the <ros2_control> block named in the
-block's order, one entry per joint that has the field's command interface)."""
+"""Reading the hub's command from joint_command messages: sensor_msgs/JointState's
+contract (each field empty or one entry per name), as topic_based_ros2_control's
+TopicBasedSystem keeps it for a <ros2_control> block of the hub alone."""
 
 import math
 
@@ -11,12 +11,19 @@ from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
 TIP = ['tip_radial', 'tip_tangential']
 
 
-@pytest.mark.parametrize('names', [['hub'], ['hub', *TIP], [*TIP, 'hub'],
+def test_a_block_of_the_hub_alone_sends_one_entry_per_field():
+    assert hub_command(['hub'], [], [1.5], [], 'velocity') == ('omega', 1.5)
+    assert hub_command(['hub'], [], [], [-0.02], 'torque') == ('torque', -0.02)
+
+
+@pytest.mark.parametrize('names', [['hub', 'x'], ['hub', *TIP], [*TIP, 'hub'],
                                    ['tip_radial', 'hub', 'tip_tangential']])
-def test_the_packed_form_of_a_block_where_only_the_hub_has_a_command_interface(names):
-    # velocity command interface on hub only: name lists all joints, velocity one entry
-    assert hub_command(names, [], [1.5], [], 'velocity') == ('omega', 1.5)
-    assert hub_command(names, [], [], [-0.02], 'torque') == ('torque', -0.02)
+def test_fewer_entries_than_names_are_refused_whichever_joint_they_might_be(names):
+    # the issue's example: name [hub, x], velocity [3.0]; the lengths differ, which
+    # sensor_msgs/JointState forbids: whose entry 3.0 is would be a guess
+    for drive, fields in (('velocity', ([], [3.0], [])), ('torque', ([], [], [0.1]))):
+        with pytest.raises(MalformedJointCommand, match=r'has 1 entries for \d joint names'):
+            hub_command(names, *fields, drive)
 
 
 def test_one_entry_per_name_is_read_by_name_and_other_joints_are_ignored():
@@ -27,21 +34,23 @@ def test_one_entry_per_name_is_read_by_name_and_other_joints_are_ignored():
 
 def test_a_hub_with_both_command_interfaces_gives_the_active_drives_field():
     names = ['hub', *TIP]
-    assert hub_command(names, [], [1.0], [0.3], 'velocity') == ('omega', 1.0)
-    assert hub_command(names, [], [1.0], [0.3], 'torque') == ('torque', 0.3)
+    assert hub_command(names, [], [1.0, 0, 0], [0.3, 0, 0], 'velocity') == ('omega', 1.0)
+    assert hub_command(names, [], [1.0, 0, 0], [0.3, 0, 0], 'torque') == ('torque', 0.3)
 
 
 @pytest.mark.parametrize('names, position, velocity, effort, drive, reason', [
-    (TIP, [], [1.0], [], 'velocity', "no joint 'hub' in the names"),
+    (TIP, [], [1.0, 1.0], [], 'velocity', "no joint 'hub' in the names"),
     ([], [], [], [], 'velocity', "no joint 'hub' in the names (got none)"),
     (['hub', 'hub'], [], [1.0, 1.0], [], 'velocity', "joint 'hub' is named 2 times"),
     (['hub'], [], [1.0, 2.0], [], 'velocity', 'velocity has 2 entries for 1 joint names'),
-    (['hub', *TIP], [], [1.0, 2.0], [], 'velocity', 'only the one entry'),
+    (['hub', *TIP], [], [1.0, 2.0], [], 'velocity', 'velocity has 2 entries for 3 joint'),
+    (TIP, [], [1.0], [], 'velocity', 'velocity has 1 entries for 2 joint names'),
+    (['hub'], [0.0, 1.0], [1.0], [], 'velocity', 'position has 2 entries for 1 joint'),
     (['hub'], [], [math.nan], [], 'velocity', "velocity of joint 'hub' is nan"),
     (['hub'], [], [math.inf], [], 'velocity', 'must be finite'),
     (['hub'], [], [], [-math.inf], 'torque', "effort of joint 'hub' is -inf"),
     (['hub'], [], [1.0], [math.nan], 'velocity', "effort of joint 'hub' is nan"),
-    (['hub', *TIP], [], [], [0.1], 'velocity',
+    (['hub', *TIP], [], [], [0.1, 0.0, 0.0], 'velocity',
      "effort for joint 'hub' ignored: drive is 'velocity' (set drive to 'torque'"),
     (['hub'], [], [1.0], [], 'torque',
      "velocity for joint 'hub' ignored: drive is 'torque' (set drive to 'velocity'"),

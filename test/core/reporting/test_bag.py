@@ -24,9 +24,10 @@ from mcap_ros2.decoder import DecoderFactory
 from reference import R0, W0, L
 
 from rotrod_core import Eq26Profile, RodParams, simulate
+from rotrod_core.live.publication import PublicationSettings
 from rotrod_core.model import interface
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
-from rotrod_core.reporting.bag import BAG_TOPICS, BagSettings, write_bag
+from rotrod_core.reporting.bag import BAG_TOPICS, topic_name, write_bag
 
 ROOT = Path(__file__).resolve().parents[3]
 T_END = 20.0
@@ -35,8 +36,8 @@ TYPES = {
     '/joint_states': 'sensor_msgs/msg/JointState',
     '/tip/deflection': 'geometry_msgs/msg/Vector3Stamped',
     '/tip/position': 'geometry_msgs/msg/PointStamped',
-    '/frequencies': 'std_msgs/msg/Float64MultiArray',
-    '/frequencies/estimate': 'std_msgs/msg/Float64MultiArray',
+    '/frequencies': 'rotrod_interfaces/msg/DynamicFrequencies',
+    '/frequencies/estimate': 'rotrod_interfaces/msg/WhirlEstimate',
     '/markers': 'visualization_msgs/msg/MarkerArray',
     '/clock': 'rosgraph_msgs/msg/Clock',
 }
@@ -119,23 +120,31 @@ def test_values_stamps_and_frames_are_the_runs(run, bag):
     assert np.max(np.abs(xyz - closed)) < 1e-15
 
     freq = got['/frequencies']
-    f = np.array([m.data for _, _, m, _ in freq])
-    w = run.omega[i]                                       # Eq. 28
-    assert np.max(np.abs(f - np.c_[(W0 - w), (W0 + w)] / (2 * math.pi))) < 1e-12
-    assert all([(d.label, d.size, d.stride) for d in m.layout.dim] == [('f1_f2_hz', 2, 2)]
-               for _, _, m, _ in freq)
+    assert [log for log, *_ in freq] == [log for log, *_ in joints]
+    assert all(round(seconds(m.header.stamp) * 1e9) == log for log, _, m, _ in freq)
+    f = np.array([(m.f1, m.f2) for _, _, m, _ in freq])
+    w = np.array([m.omega for _, _, m, _ in freq])
+    assert np.array_equal(w, run.omega[i])                 # the sample's w, and at it
+    assert np.max(np.abs(f - np.c_[(W0 - w), (W0 + w)] / (2 * math.pi))) < 1e-12   # Eq. 28
 
     clock = got['/clock']
     assert [log for log, *_ in clock] == [log for log, *_ in joints]
     assert all(round(seconds(m.clock) * 1e9) == log for log, _, m, _ in clock)
 
-    # the whirl estimate over the hold at 2 rad/s (windows within 15-20 s): Eq. 28
-    hold = [(log * 1e-9, m.data) for log, _, m, _ in got['/frequencies/estimate']
-            if 16.0 <= log * 1e-9 <= 20.0]
+    # the whirl estimate over the hold at 2 rad/s (windows within 15-20 s): Eq. 28;
+    # stamped at its window's middle, 0.495 s before the publication that completed it
+    # (the 100 samples from 0.99 s before it)
+    estimates = got['/frequencies/estimate']
+    for log, _, m, _ in estimates:
+        assert seconds(m.header.stamp) == pytest.approx(log * 1e-9 - 0.495, abs=1e-9)
+        assert m.window == pytest.approx(0.99, abs=1e-12) and m.samples == 100
+    hold = [m for log, _, m, _ in estimates if 16.0 <= log * 1e-9 <= 20.0]
     assert len(hold) >= 39
     f1, f2 = (W0 - 2.0) / (2 * math.pi), (W0 + 2.0) / (2 * math.pi)
-    for _, (e1, e2) in hold:
-        assert e1 == pytest.approx(f1, rel=1e-3) and e2 == pytest.approx(f2, rel=1e-3)
+    for m in hold:
+        assert m.f1_valid and m.f2_valid and m.reason == ''
+        assert m.f1 == pytest.approx(f1, rel=1e-3) and m.f2 == pytest.approx(f2, rel=1e-3)
+        assert 0 < m.f1_std < 1e-3 * f1 and 0 < m.f2_std < 1e-3 * f2
 
 
 def test_markers_are_drawn_in_world_at_the_drawn_tip(run, bag):
@@ -168,11 +177,12 @@ def test_the_messages_are_the_live_nodes(run, bag):
     from geometry_msgs.msg import PointStamped, Vector3Stamped
     from rclpy.serialization import deserialize_message, serialize_message
     from rosgraph_msgs.msg import Clock
+    from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
     from sensor_msgs.msg import JointState
-    from std_msgs.msg import Float64MultiArray
     from visualization_msgs.msg import MarkerArray
 
     from rotrod_core.analysis.modes import dynamic_frequencies
+    from rotrod_core.estimation.whirl import stream_estimator
     from rotrod_core.model.equations import State
     from rotrod_ros import messages
 
@@ -187,13 +197,24 @@ def test_the_messages_are_the_live_nodes(run, bag):
                                                                 'rotor')),
         '/tip/position': (PointStamped, messages.position(
             stamp, (run.x[k], run.y[k], L), 'world')),
-        '/frequencies': (Float64MultiArray, messages.frequencies(
-            *dynamic_frequencies(RodParams(), state.omega))),
+        '/frequencies': (DynamicFrequencies, messages.frequencies(
+            stamp, state.omega, *dynamic_frequencies(RodParams(), state.omega))),
         '/clock': (Clock, messages.clock(stamp)),
     }
     for topic, (cls, msg) in expected.items():
         assert deserialize_message(got[topic][j][3], cls) == msg, topic
         assert deserialize_message(serialize_message(msg), cls) == msg    # no float32
+    # the first estimate, as the node makes it from the same publications
+    estimator = stream_estimator(1.0, 100.0, 10.0)
+    for k in range(0, len(run.t), 10):
+        first = estimator.push(run.t[k], run.u[k], run.v[k])
+        if first is not None:
+            break
+    live_estimate = messages.whirl_estimate(messages.stamp(first.time), first)
+    bagged = deserialize_message(got['/frequencies/estimate'][0][3], WhirlEstimate)
+    for name in WhirlEstimate.get_fields_and_field_types():
+        a, b = getattr(bagged, name), getattr(live_estimate, name)
+        assert a == b or (a != a and b != b), name             # NaN where not valid
     # the first markers: the trail holds one point, so none is drawn
     k0 = 40
     rod = rod_centerline(RodParams(), run.u[k0], run.v[k0], run.theta[k0], scale=20.0)
@@ -204,15 +225,50 @@ def test_the_messages_are_the_live_nodes(run, bag):
         deserialize_message(serialize_message(live), MarkerArray)
 
 
-def test_bag_defaults_are_the_simulator_nodes_parameter_defaults():
-    from rotrod_ros.parameters import NodeSettings
-    node, bag = NodeSettings(), BagSettings()
-    for name in ('publish_rate', 'markers', 'marker_rate', 'marker_trail_length',
-                 'marker_deflection_scale', 'disk_radius', 'estimate_window',
-                 'estimate_rate', 'frame_prefix'):
-        assert getattr(bag, name) == getattr(node, name), name
+def test_a_bag_is_written_with_the_nodes_own_settings(run, tmp_path):
+    """One settings class: the node's NodeSettings are PublicationSettings, which a bag takes."""
+    from rotrod_ros.parameters import NodeSettings, build_settings, defaults
+    _, node = build_settings(defaults())            # the node's parameter defaults
+    assert isinstance(node, PublicationSettings) and issubclass(NodeSettings,
+                                                                PublicationSettings)
+    assert PublicationSettings(**{f: getattr(node, f) for f in
+                                  PublicationSettings.__dataclass_fields__}) == \
+        PublicationSettings()                      # a bag's defaults are the node's
     # the node's topics (test_urdf checks interface.TOPICS against a live node's graph)
-    assert {bag.topic(t): interface.TOPICS[t] for t in BAG_TOPICS} == TYPES
+    assert {topic_name('/', t): interface.TOPICS[t] for t in BAG_TOPICS} == TYPES
+    # a node configured without estimate and markers: a bag without those topics
+    quiet = NodeSettings(estimate_window=0.0, markers=False, publish_rate=50.0,
+                         frame_prefix='rod1/')
+    counts = write_bag(tmp_path / 'quiet', run, quiet, namespace='/rod1', clock=False)
+    assert set(counts) == {'/rod1/joint_states', '/rod1/tip/deflection',
+                           '/rod1/tip/position', '/rod1/frequencies'}
+    assert counts['/rod1/joint_states'] == int(T_END * 50) + 1
+
+
+def test_rosbags_reads_the_custom_types_back_from_the_bag_alone(bag):
+    """A reader that knows no rotrod type: it registers them from the bag's definitions."""
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    assert 'rotrod_interfaces/msg/WhirlEstimate' not in store.types
+    with Reader(bag[0]) as reader:
+        for conn in reader.connections:
+            if conn.msgtype.startswith('rotrod_interfaces/'):
+                store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
+        custom = [c for c in reader.connections if c.msgtype.startswith('rotrod_interfaces/')]
+        assert {c.msgtype for c in custom} == {'rotrod_interfaces/msg/DynamicFrequencies',
+                                               'rotrod_interfaces/msg/WhirlEstimate'}
+        rows = [(conn.msgtype, store.deserialize_cdr(raw, conn.msgtype))
+                for conn, _, raw in reader.messages(connections=custom)]
+    freq = [m for t, m in rows if t.endswith('DynamicFrequencies')]
+    assert len(freq) == int(T_END * RATE) + 1
+    for m in freq[::50]:                                   # Eq. 28 at each message's w
+        assert m.f1 == pytest.approx((W0 - m.omega) / (2 * math.pi), rel=1e-12)
+        assert m.f2 == pytest.approx((W0 + m.omega) / (2 * math.pi), rel=1e-12)
+    assert max(m.omega for m in freq) == pytest.approx(2.0, rel=1e-12)
+    estimates = [m for t, m in rows if t.endswith('WhirlEstimate')]
+    assert len(estimates) == 191 and all(isinstance(m.reason, str) for m in estimates)
 
 
 def test_metadata_yaml_is_what_jazzys_rosbag2_reads(bag):
@@ -302,6 +358,9 @@ def test_rotrod_simulate_writes_a_namespaced_bag_and_refuses_bad_requests(tmp_pa
     nothing = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     assert nothing.returncode == 2 and 'nothing to write' in nothing.stderr
     with pytest.raises(ValueError, match='estimate_rate'):
-        BagSettings(estimate_rate=200.0)
+        PublicationSettings(estimate_rate=200.0)
     with pytest.raises(ValueError, match='namespace'):
-        BagSettings(namespace='offline')
+        write_bag(tmp_path / 'ns', None, namespace='offline')
+    bad_ns = subprocess.run([*cmd, '--bag', str(tmp_path / 'ns'), '--bag-namespace', 'x'],
+                            cwd=ROOT, capture_output=True, text=True)
+    assert bad_ns.returncode == 2 and 'namespace must start with /' in bad_ns.stderr
