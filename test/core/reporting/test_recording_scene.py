@@ -109,3 +109,16 @@ def test_events_mark_the_stages_on_the_profiles_timeline(eq26):
     # no critical deflection event: Eq. 26 stays under 3 mm (2.79 mm at 2 rad/s)
     assert not any('critical' in text[0] for text in texts)
     assert math.isclose(Mechanism().deflection_limit, 0.003)
+
+
+def test_the_usage_page_states_the_recordings_constants_as_the_code_has_them():
+    from pathlib import Path
+
+    from rotrod_core.analysis import run_events
+    text = (Path(__file__).resolve().parents[3] / 'docs' / 'usage.md').read_text()
+    mech = Mechanism()
+    assert f'`TRAIL_SECONDS` ({scene3d.TRAIL_SECONDS:g} s)' in text
+    assert f'`DWELL` ({run_events.DWELL:g} s)' in text
+    assert f'`MIN_CHANGE` ({run_events.MIN_CHANGE:g} rad/s)' in text
+    assert f'size ({mech.deflection_scale:g}, as the markers' in text
+    assert f'(`deflection_limit`, {1e3 * mech.deflection_limit:g} mm)' in text
