@@ -347,9 +347,11 @@ def cmd_reproduce(args) -> int:
 
 def cmd_screenshot(args) -> int:
     """The Rerun viewer's own screenshot of a recording, headless."""
-    from rotrod_core.reporting.viewer_screenshot import ViewerUnavailable, screenshot
+    from rotrod_core.reporting.viewer_screenshot import ViewerUnavailable, compact, screenshot
     try:
         path = screenshot(args.recording, args.output)
+        if args.compact:
+            compact(path)
     except (ViewerUnavailable, FileNotFoundError) as exc:
         print(f'rotrod screenshot: error: {exc}', file=sys.stderr)
         return 2
@@ -536,6 +538,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('-o', '--output', type=Path, default=Path('out/dashboard.png'),
                    help='PNG to write (default out/dashboard.png; the README shows '
                         'docs/figures/dashboard.png)')
+    p.add_argument('--compact', action='store_true',
+                   help='half the size and a 256-colour palette (for docs/figures)')
     p.set_defaults(func=cmd_screenshot)
 
     p = sub.add_parser('fleet', add_help=False, prefix_chars='\0',

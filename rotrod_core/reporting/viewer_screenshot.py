@@ -150,3 +150,19 @@ def screenshot(recording: str | Path, png: str | Path, *, window: tuple = WINDOW
         if xvfb is not None:
             _stop(xvfb)
         shutil.rmtree(work, ignore_errors=True)
+
+
+def compact(png: str | Path) -> Path:
+    """Shrink a screenshot for the documentation, in place.
+
+    Half its pixels each way (the viewer saves at twice its window's size) and a
+    256-colour palette: a tenth of the bytes, for docs/figures (kept small).
+    """
+    from PIL import Image
+    png = Path(png)
+    with Image.open(png) as image:
+        rgb = image.convert('RGB')
+    half = rgb.resize((rgb.width // 2, rgb.height // 2), Image.Resampling.LANCZOS)
+    half.quantize(colors=256, method=Image.Quantize.FASTOCTREE,
+                  dither=Image.Dither.NONE).save(png, optimize=True)
+    return png
