@@ -100,6 +100,8 @@ INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pen
     interfaces.sub('/diagnostics', DiagnosticArray, "the simulator's of this namespace: a "
                    'halt (and its clearing) is an entry in the recording\'s events', QOS_DEPTH),
 )
+EVERY_TICK = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies')
+"""The topics a simulator publishes at every tick (the others now and then)."""
 SIMULATOR = 'rotrod_simulator'
 """The node name whose diagnostics the logger follows (in the logger's namespace)."""
 
@@ -157,6 +159,12 @@ class RerunLogger(Node):
         io = interfaces.create(self, INTERFACES, {
             i.name: received(k) for k, i in enumerate(INTERFACES)})
         self._topics = [io[i.name] for i in INTERFACES]     # in a tick's order
+        pairs = list(zip(self._topics, self._handlers))
+        # every tick publishes these: taken in turn; the others (an estimate every
+        # tenth tick, diagnostics) are drained after them, which spares a take that
+        # finds nothing per tick (each costs about as much as one that finds a message)
+        self._every_tick = [p for i, p in zip(INTERFACES, pairs) if i.name in EVERY_TICK]
+        self._sometimes = [p for i, p in zip(INTERFACES, pairs) if i.name not in EVERY_TICK]
         self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
@@ -261,24 +269,25 @@ class RerunLogger(Node):
         One message per subscription in turn (a tick's order), taken as rclpy's executor
         and ``wait_for_message`` take them (that also works after the shutdown): one
         executor callback then handles a whole burst, where the executor's own
-        round per message cost most of the logger's time (py-spy). Returns how many.
+        round per message cost most of the logger's time (py-spy). The topics not
+        published every tick (EVERY_TICK) are drained after the others. Returns how many.
         """
         taken = 0
         deadline = time.monotonic() + budget
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline:       # the topics every tick publishes, in turn
             progress = False
-            for sub, handle in zip(self._topics, self._handlers):
-                try:
-                    with sub.handle:
-                        got = sub.handle.take_message(sub.msg_type, sub.raw)
-                except Exception:  # the subscription or its context is gone
-                    got = None
+            for sub, handle in self._every_tick:
+                got = _take(sub)
                 if got is not None:
                     handle(got[0], got[1])
                     taken += 1
                     progress = True
             if not progress:
                 break
+        for sub, handle in self._sometimes:       # then the others, drained, whatever the
+            while (got := _take(sub)) is not None:    # budget (they come far less often)
+                handle(got[0], got[1])
+                taken += 1
         self._stamp_frequencies()
         return taken
 
@@ -297,6 +306,15 @@ class RerunLogger(Node):
         if drained:
             self.get_logger().info(f'handled {drained} messages received before the end')
         self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
+
+
+def _take(sub):
+    """(message, info) taken from a subscription, or None (none, or it is gone)."""
+    try:
+        with sub.handle:
+            return sub.handle.take_message(sub.msg_type, sub.raw)
+    except Exception:  # the subscription or its context is gone
+        return None
 
 
 def _parser() -> argparse.ArgumentParser:
