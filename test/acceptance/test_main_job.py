@@ -129,7 +129,12 @@ def test_the_recording_opens_on_the_mechanism_and_the_whole_path(demo, tmp_path)
             pytest.fail(message)
         pytest.skip(message)
     import matplotlib.image
-    png = viewer_screenshot.screenshot(demo[0], tmp_path / 'dashboard.png')
+    try:
+        png = viewer_screenshot.screenshot(demo[0], tmp_path / 'dashboard.png')
+    except viewer_screenshot.ViewerUnavailable as exc:   # once more: a busy shared machine
+        print(f'the viewer failed once: {exc}')
+        png = viewer_screenshot.screenshot(demo[0], tmp_path / 'dashboard.png')
+    print(f'screenshot: {png}')
     image = matplotlib.image.imread(png)[:, :, :3]
     height, width = image.shape[:2]
 
