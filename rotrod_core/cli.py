@@ -350,6 +350,20 @@ def cmd_reproduce(args) -> int:
     return 0
 
 
+def cmd_screenshot(args) -> int:
+    """The Rerun viewer's own screenshot of a recording, headless."""
+    from rotrod_core.reporting.viewer_screenshot import ViewerUnavailable, compact, screenshot
+    try:
+        path = screenshot(args.recording, args.output)
+        if args.compact:
+            compact(path)
+    except (ViewerUnavailable, FileNotFoundError) as exc:
+        print(f'rotrod screenshot: error: {exc}', file=sys.stderr)
+        return 2
+    print(f'wrote {path}')
+    return 0
+
+
 def cmd_analyze(args) -> int:
     """Campbell diagrams, critical-speed maps and the coupling drift, into --out."""
     from rotrod_core.reporting.analyze import PARTS, analyze
@@ -521,6 +535,17 @@ def build_parser() -> argparse.ArgumentParser:
                         'of config/planned.yaml (docs/planner.md)')
     p.add_argument('--out', default='out', help='output directory of --offline (default ./out)')
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser('screenshot', help="the Rerun viewer's own screenshot of a recording, "
+                                          'headless (Xvfb and software Vulkan: Debian '
+                                          'packages xvfb, mesa-vulkan-drivers)')
+    p.add_argument('recording', type=Path, help='the .rrd file (e.g. out/rotrod.rrd)')
+    p.add_argument('-o', '--output', type=Path, default=Path('out/dashboard.png'),
+                   help='PNG to write (default out/dashboard.png; the README shows '
+                        'docs/figures/dashboard.png)')
+    p.add_argument('--compact', action='store_true',
+                   help='half the size and a 256-colour palette (for docs/figures)')
+    p.set_defaults(func=cmd_screenshot)
 
     p = sub.add_parser('fleet', add_help=False, prefix_chars='\0',
                        help='N simulators in the namespaces rod0.. in real time, from one '

@@ -7,7 +7,10 @@ time on the message stamps and a default blueprint, so the file opens as a dashb
 serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``). With
 ``record_from:=motion`` it keeps only the last ``pretrigger`` seconds until the hub's
 angular velocity first changes: the file begins just before the motion, not when the
-logger started.
+logger started. The recording draws the mechanism in 3D from ``joint_states`` (the hub
+angle and the tip joints' true deflection) with the rod parameters given here (give
+the logger the simulator's: config/table1.yaml does), and marks the run's stages and
+its first passage of ``deflection_limit``.
 
 Data is written in batches every ``flush_period`` seconds. On SIGINT, SIGTERM or the
 end of the run the messages already received but not yet handled are taken too, the
@@ -21,22 +24,28 @@ leaves a file without footer holding everything up to its last write, at most
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
+from dataclasses import replace
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
 from sensor_msgs.msg import JointState
 
+from rotrod_core.model.geometry import sphere_radius
 from rotrod_core.reporting.recording import RecordingWriter
+from rotrod_core.reporting.recording_scene import Mechanism
 
 from . import interfaces, node_main, parameter_specs
 from .interfaces import ALWAYS
 from .messages import to_seconds
 from .node_main import ConfigurationError
 from .parameter_specs import Spec
+from .parameters import SPECS_BY_NAME
 
 NODE_NAME = 'rotrod_rerun_logger'
 QOS_DEPTH = 1000
@@ -51,7 +60,10 @@ CLOSE_BUDGET = 10.0
 """Wall seconds the logger spends at most at its end on messages already received."""
 
 RECORD_FROM = ('start', 'motion')
-PARAMETERS = (
+DRAWN = ('mass', 'rod_length', 'rod_diameter', 'eccentricity', 'deflection_limit',
+         'marker_deflection_scale', 'disk_radius')
+"""The simulator's parameters the recording draws with (the same names and defaults)."""
+PARAMETERS: tuple[Spec, ...] = (
     Spec('output', 'rotrod.rrd', 'path of the Rerun recording to write'),
     Spec('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
     Spec('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)', '', 1, 65535),
@@ -63,6 +75,9 @@ PARAMETERS = (
          'motion, not when the logger started)', choices=RECORD_FROM),
     Spec('pretrigger', 0.5, 'with record_from motion: stamp time kept from before the hub '
          'first moved', 's', 0.0, 86400.0),
+    *(replace(SPECS_BY_NAME[name], read_only=True,
+              text=f"as the simulator's, for the 3D scene: {SPECS_BY_NAME[name].text}")
+      for name in DRAWN),
 )
 READ_ONLY = True
 """The logger's parameters are set at start only."""
@@ -79,7 +94,13 @@ INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pen
     interfaces.sub('frequencies/estimate', WhirlEstimate, 'f1, f2 Hz estimated from the '
                    "motion (NaN where not valid), at their stamp: the window's middle",
                    QOS_DEPTH, ALWAYS),
+    interfaces.sub('/diagnostics', DiagnosticArray, "the simulator's of this namespace: a "
+                   'halt (and its clearing) is an entry in the recording\'s events', QOS_DEPTH),
 )
+EVERY_TICK = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies')
+"""The topics a simulator publishes at every tick (the others now and then)."""
+SIMULATOR = 'rotrod_simulator'
+"""The node name whose diagnostics the logger follows (in the logger's namespace)."""
 
 
 class RerunLogger(Node):
@@ -95,22 +116,33 @@ class RerunLogger(Node):
                                      f'{values["flush_period"]!r}')
         on_motion = values['record_from'] == 'motion'
         try:
+            self.mechanism = Mechanism(
+                eccentricity=values['eccentricity'], rod_length=values['rod_length'],
+                rod_diameter=values['rod_diameter'],
+                mass_radius=sphere_radius(values['mass']), disk_radius=values['disk_radius'],
+                deflection_scale=values['marker_deflection_scale'],
+                deflection_limit=values['deflection_limit'])
             self.writer = RecordingWriter(values['output'],
                                           serve_port=values['serve_port'] if values['serve']
                                           else None,
                                           pretrigger=values['pretrigger'] if on_motion
-                                          else None)
+                                          else None, mechanism=self.mechanism)
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
         except Exception as exc:  # rerun raises several kinds for a bad path or port
             raise ConfigurationError(f'cannot open the recording: {exc}') from None
         self._last_stamp: float | None = None
-        self._omega_at_rest = 0.0
+        self._joints: tuple = ((), None)    # (names, indices of hub, tip_radial, tip_tangential)
+        self._height_checked = False
+        # joint states' (DDS source time ns, stamp s), oldest first, for the frequencies
         handlers = {'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
                     'tip/position': self._on_position,
                     'frequencies': lambda m, info: self._on_frequencies(m, info, False),
                     'frequencies/estimate': lambda m, info: self._on_frequencies(m, info,
-                                                                                 True)}
+                                                                                 True),
+                    '/diagnostics': self._on_diagnostics}
+        self._simulator = self.get_namespace().rstrip('/') + '/' + SIMULATOR
+        self._halted = 'no'
         self._handlers = [handlers[i.name] for i in INTERFACES]
 
         def received(index):
@@ -121,23 +153,45 @@ class RerunLogger(Node):
         io = interfaces.create(self, INTERFACES, {
             i.name: received(k) for k, i in enumerate(INTERFACES)})
         self._topics = [io[i.name] for i in INTERFACES]     # in a tick's order
+        pairs = list(zip(self._topics, self._handlers))
+        # every tick publishes these: taken in turn; the others (an estimate every
+        # tenth tick, diagnostics) are drained after them, which spares a take that
+        # finds nothing per tick (each costs about as much as one that finds a message)
+        self._every_tick = [p for i, p in zip(INTERFACES, pairs) if i.name in EVERY_TICK]
+        self._sometimes = [p for i, p in zip(INTERFACES, pairs) if i.name not in EVERY_TICK]
         self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         self.get_logger().info(f'recording to {self.writer.path}{where}')
 
+    def _joint_indices(self, names) -> tuple | None:
+        """Indices of hub, tip_radial, tip_tangential in ``names`` (cached per name list).
+
+        None without a hub; the tip's (None, None) without tip joints.
+        """
+        if names != self._joints[0]:
+            names = list(names)
+            hub = names.index('hub') if 'hub' in names else None
+            tips = ((names.index('tip_radial'), names.index('tip_tangential'))
+                    if {'tip_radial', 'tip_tangential'} <= set(names) else (None, None))
+            self._joints = (names, None if hub is None else (hub, *tips))
+        return self._joints[1]
+
     def _on_joint(self, msg: JointState, info) -> None:
-        if 'hub' not in msg.name:
+        found = self._joint_indices(msg.name)
+        if found is None:
             return
-        i = list(msg.name).index('hub')
+        i, ju, jv = found
         t, omega = to_seconds(msg.header.stamp), msg.velocity[i]
         if self._last_stamp is None:
             self.get_logger().info(f'receiving: first joint state stamped {t:.3f} s')
-            self._omega_at_rest = omega
         self._last_stamp = t
+        armed = self.writer.armed
         self.writer.add_state(t, omega, msg.effort[i])
-        if self.writer.armed and omega != self._omega_at_rest:
-            self.writer.trigger()
+        position = msg.position
+        if ju is not None and len(position) > max(i, ju, jv):
+            self.writer.add_pose(t, position[i], position[ju], position[jv])
+        if armed and not self.writer.armed:
             self.get_logger().info(f'recording: the hub moved at stamp {t:.3f} s; the file '
                                    f'starts {self.writer.pretrigger:g} s before')
 
@@ -147,6 +201,27 @@ class RerunLogger(Node):
     def _on_position(self, msg: PointStamped, info) -> None:
         p = msg.point
         self.writer.add_position(to_seconds(msg.header.stamp), p.x, p.y, p.z)
+        if not self._height_checked:
+            self._height_checked = True
+            length = self.mechanism.rod_length
+            if not math.isclose(p.z, length, rel_tol=1e-6):
+                self.get_logger().warning(
+                    f'the mass is at height {p.z:g} m, the rod_length given to the logger '
+                    f'is {length:g} m: the 3D scene draws another rod than the simulator\'s '
+                    '(give the logger the simulator\'s rod parameters)')
+
+    def _on_diagnostics(self, msg: DiagnosticArray, info) -> None:
+        for status in msg.status:
+            if status.hardware_id != self._simulator:
+                continue
+            halted = next((kv.value for kv in status.values if kv.key == 'halted'), 'no')
+            if halted != self._halted:
+                t = to_seconds(msg.header.stamp)
+                if halted != 'no':
+                    self.writer.event(t, f'halted: {halted}', 'ERROR')
+                else:
+                    self.writer.event(t, 'the halt is cleared (reset)', 'WARN')
+                self._halted = halted
 
     def _on_frequencies(self, msg: DynamicFrequencies | WhirlEstimate, info,
                         estimate: bool) -> None:
@@ -158,24 +233,25 @@ class RerunLogger(Node):
         One message per subscription in turn (a tick's order), taken as rclpy's executor
         and ``wait_for_message`` take them (that also works after the shutdown): one
         executor callback then handles a whole burst, where the executor's own
-        round per message cost most of the logger's time (py-spy). Returns how many.
+        round per message cost most of the logger's time (py-spy). The topics not
+        published every tick (EVERY_TICK) are drained after the others. Returns how many.
         """
         taken = 0
         deadline = time.monotonic() + budget
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline:       # the topics every tick publishes, in turn
             progress = False
-            for sub, handle in zip(self._topics, self._handlers):
-                try:
-                    with sub.handle:
-                        got = sub.handle.take_message(sub.msg_type, sub.raw)
-                except Exception:  # the subscription or its context is gone
-                    got = None
+            for sub, handle in self._every_tick:
+                got = _take(sub)
                 if got is not None:
                     handle(got[0], got[1])
                     taken += 1
                     progress = True
             if not progress:
                 break
+        for sub, handle in self._sometimes:       # then the others, drained, whatever the
+            while (got := _take(sub)) is not None:    # budget (they come far less often)
+                handle(got[0], got[1])
+                taken += 1
         return taken
 
     def _flush(self) -> None:
@@ -192,6 +268,15 @@ class RerunLogger(Node):
         if drained:
             self.get_logger().info(f'handled {drained} messages received before the end')
         self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
+
+
+def _take(sub):
+    """(message, info) taken from a subscription, or None (none, or it is gone)."""
+    try:
+        with sub.handle:
+            return sub.handle.take_message(sub.msg_type, sub.raw)
+    except Exception:  # the subscription or its context is gone
+        return None
 
 
 def _parser() -> argparse.ArgumentParser:

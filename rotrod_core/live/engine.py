@@ -644,7 +644,8 @@ class SimulationEngine:
                 ('critical_deflection_first_crossed_s',
                  'never' if self.first_crossed_at is None else self.first_crossed_at),
                 ('critical_deflection_crossings', self.limit_crossings),
-                ('max_deflection_m', cfg.max_deflection))
+                ('max_deflection_m', cfg.max_deflection),
+                ('halted', self.halted or 'no'))
 
     def condition(self) -> tuple[int, str]:
         """The session's health level and its reason, without the values (cheap).

@@ -29,16 +29,32 @@ def rod_centerline(params: RodParams, u: float, v: float, theta: float, points: 
     deflected by (u, v) m in the rotating frame, multiplied by ``scale`` (to make
     millimetres visible in a viewer; 1 = true size).
     """
+    shape = rod_shapes(u, v, eccentricity=float(params.eccentricity),
+                       rod_length=float(params.rod_length), points=points, scale=scale)[0]
+    c, sn = np.cos(theta), np.sin(theta)
+    return np.column_stack([shape[:, 0] * c - shape[:, 1] * sn,
+                            shape[:, 0] * sn + shape[:, 1] * c, shape[:, 2]])
+
+
+def rod_shapes(u, v, *, eccentricity: float, rod_length: float, points: int = 12,
+               scale: float = 1.0) -> np.ndarray:
+    """The rod from root to tip in the rotating frame, for each deflection: (N, points, 3) m.
+
+    ``u``, ``v`` (m, scalars or N values) the tip's deflection, drawn ``scale`` times
+    its size; x radial (the root at ``eccentricity`` m), y tangential, z up the rod
+    (``rod_length`` m).
+    """
     if points < 2:
         raise ValueError(f'points must be >= 2, got {points!r}')
-    length, r0 = float(params.rod_length), float(params.eccentricity)
+    u = np.atleast_1d(np.asarray(u, dtype=float))
+    v = np.atleast_1d(np.asarray(v, dtype=float))
     s = np.linspace(0.0, 1.0, points)
     shape = cantilever_shape(s) * scale
-    radial = r0 + u * shape
-    tangential = v * shape
-    c, sn = np.cos(theta), np.sin(theta)
-    return np.column_stack([radial * c - tangential * sn, radial * sn + tangential * c,
-                            s * length])
+    out = np.empty((len(u), points, 3))
+    out[:, :, 0] = eccentricity + u[:, None] * shape
+    out[:, :, 1] = v[:, None] * shape
+    out[:, :, 2] = s * rod_length
+    return out
 
 
 def sphere_radius(mass: float, density: float = STEEL_DENSITY) -> float:

@@ -1,6 +1,7 @@
 """The main job (``rotrod demo``: simulator, profile publisher and Rerun logger) as real
 processes."""
 
+import os
 import subprocess
 import sys
 
@@ -9,7 +10,7 @@ import pytest
 
 from rotrod_core import Eq26Profile, RodParams, simulate
 from rotrod_core.analysis.alignment import profile_delay
-from rotrod_core.reporting import recording
+from rotrod_core.reporting import recording, viewer_screenshot
 from rotrod_ros.install import executable
 
 pytestmark = pytest.mark.ros
@@ -25,12 +26,19 @@ def verify(path) -> str:
     return text
 
 
-def test_the_main_job_end_to_end(tmp_path):
-    """``rotrod demo``: Eq. 26 through the three nodes; the recording is read back."""
-    out = tmp_path / 'demo' / 'rotrod.rrd'
+@pytest.fixture(scope='module')
+def demo(tmp_path_factory):
+    """``rotrod demo`` run once: (its recording, the completed process)."""
+    out = tmp_path_factory.mktemp('demo') / 'rotrod.rrd'
     run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)], capture_output=True,
                          text=True, timeout=300)
     assert run.returncode == 0, run.stdout + run.stderr
+    return out, run
+
+
+def test_the_main_job_end_to_end(demo):
+    """``rotrod demo``: Eq. 26 through the three nodes; the recording is read back."""
+    out, run = demo
     for stage in ('spin-up', 'hold', 'spin-down', 'rest'):
         assert stage in run.stdout
     assert f'recording: {out}' in run.stdout
@@ -78,6 +86,68 @@ def test_the_main_job_end_to_end(tmp_path):
     error = np.abs(fe[spin_up][given] / model[given] - 1)
     print(f'error of the estimates: median {np.median(error):.2%}, max {error.max():.2%}')
     assert error.max() <= 0.02
+    # time zero at the profile's start: the stamp before the hub first moved, which is
+    # the profile's start (found by fitting w to Eq. 26) to two samples
+    tp, _ = recording.read_component(out, recording.OMEGA, 'Scalars:scalars',
+                                     recording.PROFILE_TIMELINE)
+    origin = float(np.median(t - tp))
+    assert abs(origin - shift) <= 0.02 + 1e-9, (origin, shift)
+
+
+def share(pixels, condition) -> float:
+    """Share of the (N, 3) RGB pixels (0..1) for which condition(r, g, b) holds."""
+    return float(np.mean(condition(pixels[:, 0], pixels[:, 1], pixels[:, 2])))
+
+
+def orange(r, g, b):    # the mass (scene.MASS_COLOR, shaded)
+    return (r > 0.6) & (g > 0.1) & (g < 0.5) & (b < 0.35)
+
+
+def blue(r, g, b):      # the rod; the spin-up path
+    return (b > 0.5) & (r < 0.4) & (b - r > 0.3)
+
+
+def light_grey(r, g, b):    # the disk (the grid is dark grey)
+    low, high = np.minimum(np.minimum(r, g), b), np.maximum(np.maximum(r, g), b)
+    return (low > 0.45) & (high - low < 0.12)
+
+
+def red(r, g, b):       # the critical-deflection circle; the spin-down path
+    return (r > 0.7) & (g < 0.45) & (b < 0.45)
+
+
+def test_the_recording_opens_on_the_mechanism_and_the_whole_path(demo, tmp_path):
+    """The real viewer, headless, opens the demo's recording without any user action on
+    the disk, rod and mass (3D, upper left) and on the whole path in the rotating frame
+    with the critical-deflection circle (2D, lower left): each panel draws more than
+    its grid. In CI (CI=true) a viewer that cannot run fails the test."""
+    lacking = viewer_screenshot.missing()
+    if lacking:
+        message = (f'the headless viewer needs {", ".join(lacking)} (apt-get install '
+                   f'{" ".join(viewer_screenshot.DEBIAN_PACKAGES)})')
+        if os.environ.get('CI') == 'true':
+            pytest.fail(message)
+        pytest.skip(message)
+    import matplotlib.image
+    try:
+        png = viewer_screenshot.screenshot(demo[0], tmp_path / 'dashboard.png')
+    except viewer_screenshot.ViewerUnavailable as exc:   # once more: a busy shared machine
+        print(f'the viewer failed once: {exc}')
+        png = viewer_screenshot.screenshot(demo[0], tmp_path / 'dashboard.png')
+    print(f'screenshot: {png}')
+    image = matplotlib.image.imread(png)[:, :, :3]
+    height, width = image.shape[:2]
+
+    def panel(x0, x1, y0, y1):
+        return image[int(y0 * height):int(y1 * height),
+                     int(x0 * width):int(x1 * width)].reshape(-1, 3)
+    mechanism, path = panel(0.02, 0.48, 0.06, 0.48), panel(0.02, 0.48, 0.56, 0.94)
+    found = {'disk': share(mechanism, light_grey), 'rod': share(mechanism, blue),
+             'mass': share(mechanism, orange), 'circle': share(path, red),
+             'spin-up path': share(path, blue)}
+    print('share of the panel\'s pixels: ' + ', '.join(f'{k} {v:.3%}' for k, v in found.items()))
+    assert found['disk'] > 0.01 and found['rod'] > 3e-4 and found['mass'] > 3e-4, found
+    assert found['circle'] > 1e-3 and found['spin-up path'] > 5e-4, found
 
 
 def test_demo_is_a_module_too():

@@ -76,13 +76,29 @@ def test_a_rectangular_section_is_built_from_its_two_sizes():
 
 def test_table1_file_holds_the_papers_parameters_and_known_names():
     doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
-    assert list(doc) == ['/**/rotrod_simulator', '/**/rotrod_profile_publisher']
+    assert list(doc) == ['/**/rotrod_simulator', '/**/rotrod_profile_publisher',
+                         '/**/rotrod_rerun_logger']
     values = doc['/**/rotrod_simulator']['ros__parameters']
     assert set(values) <= set(SPECS_BY_NAME)
     assert (values['mass'], values['rod_length'], values['rod_diameter'],
             values['youngs_modulus'], values['eccentricity']) == (M, L, D, E, R0)
     assert values['deflection_limit'] == 0.003          # the paper's 3.0 mm
     build_settings({**defaults(), **values})
+
+
+def test_the_rerun_logger_draws_the_simulators_rod():
+    """config/table1.yaml gives the logger the simulator's rod geometry and critical
+    deflection, value for value (the recording's 3D scene and circle are that rod's)."""
+    from rotrod_ros.rerun_logger import DRAWN, PARAMETERS
+    doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
+    simulator = doc['/**/rotrod_simulator']['ros__parameters']
+    logger = doc['/**/rotrod_rerun_logger']['ros__parameters']
+    assert logger == {k: v for k, v in simulator.items() if k in DRAWN}
+    specs = {s.name: s for s in PARAMETERS}
+    for name in DRAWN:            # the simulator's defaults, units and ranges
+        sim = SPECS_BY_NAME[name]
+        assert (specs[name].default, specs[name].unit, specs[name].bounds) == (
+            sim.default, sim.unit, sim.bounds)
 
 
 @pytest.mark.parametrize('name', ['table1.yaml', 'real_rig.yaml'])

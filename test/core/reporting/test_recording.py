@@ -29,6 +29,14 @@ def test_an_armed_writer_keeps_only_the_pretrigger_seconds_then_records_everythi
     assert np.array_equal(w, np.where(kept >= 5.0, 1.0, 0.0))
     assert np.allclose(u, 1e-3 * kept)
     assert writer.samples == len(kept)
+    # time zero at the profile's start: the last stamp before the hub first moved
+    assert writer.origin == pytest.approx(4.99)
+    tp, _ = recording.read_component(path, recording.OMEGA, 'Scalars:scalars',
+                                     recording.PROFILE_TIMELINE)
+    assert np.allclose(tp, kept - 4.99, atol=2e-9)
+    _, texts = recording.read_component(path, recording.EVENTS, 'TextLog:text')
+    assert any('the profile starts: the hub first moves after stamp 4.990 s' in x[0]
+               for x in texts)
 
 
 @pytest.mark.parametrize('pretrigger', [-1.0, float('nan'), float('inf')])
