@@ -58,8 +58,17 @@ def _shutting_down() -> bool:
     return True
 
 
+_SIGNALLED: list = []
+"""The signals :func:`_interrupt` took (own_signals)."""
+
+
 def _interrupt(signum, frame):
-    """A signal ends the spin (own_signals): as Ctrl-C does in Python."""
+    """A signal ends the spin (own_signals): as Ctrl-C does in Python.
+
+    The KeyboardInterrupt may surface inside rclpy's C++ (a message being taken), which
+    turns it into another error: the signal is noted so that run() knows either way.
+    """
+    _SIGNALLED.append(signum)
     raise KeyboardInterrupt(signal.Signals(signum).name)
 
 
@@ -144,7 +153,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         except Exception:
-            if not _shutting_down():
+            if not (_SIGNALLED or _shutting_down()):
                 raise
         return 0
     finally:

@@ -25,6 +25,8 @@ and rig identification (the live RK4 stepper evaluates the same
   :func:`frechet_simpson` (the derivative of a step's exponential applied to the
   state) and :func:`sensitivity_chain` (forward sensitivities along the chain).
 
+Model: docs/model.md#kernel, docs/model.md#eq-deflection.
+
 Complex affine tuples are ``(n11, n12, n21, n22, c1, c2)``: the matrix
 [[n11, n12, c1], [n21, n22, c2], [0, 0, 0]] on (z, z', 1); ``None`` is a structural
 zero, so the algebra skips it.

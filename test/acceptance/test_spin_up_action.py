@@ -114,7 +114,9 @@ def test_a_planned_goal_arrives_with_the_predicted_residual_below_eq26s(
     assert planned.peak_deflection == pytest.approx(peak, rel=1e-9)
     assert static_deflection(2.0) <= peak < LIMIT
     moving = rows[(rows[:, 2] > 0) & (rows[:, 0] < arrived)]
-    assert planned.duration == pytest.approx(arrived - moving[0, 0], abs=1e-6)
+    # the server takes arrival within ARRIVED of the target: at most one 100 Hz joint
+    # state before w equals it exactly
+    assert planned.duration == pytest.approx(arrived - moving[0, 0], abs=0.01 + 1e-6)
 
     # back to rest with a planned spin-down, then the paper's Eq. 26 spin-up (T = 15 s)
     _, _, future = send(ros_node, client, omega_target=0.0, profile=SpinUp.Goal.PLANNED)

@@ -284,6 +284,7 @@ def test_console_scripts_installed_and_run(colcon_install):
                 assert _under(path, prefix), f'{name}: {mod} imported from {path}'
 
 
+@pytest.mark.long      # about a minute (cmake and the rosidl generators): .ci/run runs it
 def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
     """``colcon build --base-paths src src/rotrod/rotrod_interfaces`` (docs/usage.md):
     both packages, in dependency order, with this venv as the ROS install (its ament
