@@ -142,7 +142,8 @@ def test_profile_is_smooth_and_ends_at_rest(nominal):
     assert wdd * h < 0.01 * np.max(np.abs(wd))
     for tk in np.linspace(0, T, 12):            # knots: no jump of w' either side
         assert p.omega_dot(tk - 1e-9) == pytest.approx(p.omega_dot(tk + 1e-9), abs=1e-6)
-    assert p.angle(T + 1) == pytest.approx(quad(p.omega, 0, T, limit=200)[0] + 2.0, rel=1e-9)
+    integral = quad(p.omega, 0, T, limit=400, epsabs=1e-13, epsrel=1e-13)[0]
+    assert p.angle(T + 1) == pytest.approx(integral + 2.0, rel=1e-9)
     assert p.max_angular_acceleration == pytest.approx(np.max(np.abs(wd)), rel=1e-4)
 
 

