@@ -88,6 +88,7 @@ class _Sample:
     start: np.ndarray       # (u, v, u', v', 1) at omega_start, at rest about its static
     target: np.ndarray      # (u, v, u', v') static at omega_target
     rows: np.ndarray        # complex (n, 4): residual = sum |rows @ (x - target)|
+    parts: tuple            # propagation.derivative_parts(co): dA/dw, dA/dw' of this rod
 
 
 def _coefficients(params: RodParams, scale: float) -> Coefficients:
@@ -99,25 +100,16 @@ def _coefficients(params: RodParams, scale: float) -> Coefficients:
                                                    * scale * scale))
 
 
-_STACKED: dict = {}
-
-
 def _stacked(samples) -> tuple[Coefficients, tuple]:
     """The samples' coefficients as arrays of shape (B, 1), and their derivative parts.
 
-    One row per sample; the parts are :func:`~rotrod_core.model.propagation.derivative_parts`
-    (kept for the last few sets of samples).
+    One row per sample; the parts (:func:`~rotrod_core.model.propagation.derivative_parts`,
+    each sample's own, evaluated once in :func:`_sample`) stacked to (B, 1, 5, 5).
     """
-    key = tuple(id(s) for s in samples)
-    found = _STACKED.get(key)
-    if found is None or len(found[0]) != len(samples) or not all(
-            a is b for a, b in zip(found[0], samples)):     # the cache holds them: ids unique
-        co = Coefficients(**{k: np.array([float(getattr(s.co, k)) for s in samples])[:, None]
-                             for k in vars(samples[0].co)})
-        if len(_STACKED) > 16:
-            _STACKED.pop(next(iter(_STACKED)))
-        found = _STACKED[key] = (list(samples), co, propagation.derivative_parts(co))
-    return found[1], found[2]
+    co = Coefficients(**{k: np.array([float(getattr(s.co, k)) for s in samples])[:, None]
+                         for k in vars(samples[0].co)})
+    parts = tuple(np.stack([s.parts[i] for s in samples])[:, None] for i in range(3))
+    return co, parts
 
 
 def _free_matrix(co: Coefficients, omega: float) -> np.ndarray:
@@ -137,7 +129,8 @@ def _sample(params: RodParams, scale: float, omega_start: float,
                              f'frequencies x {scale:g}): no residual-free arrival or start '
                              'exists there')
         states.append(np.linalg.solve(A[:4, :4], -A[:4, 4]))
-    return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target))
+    return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target),
+                   propagation.derivative_parts(co))
 
 
 def _residual_rows(co: Coefficients, omega: float) -> np.ndarray:

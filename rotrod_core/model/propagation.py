@@ -18,8 +18,8 @@ and rig identification (the live RK4 stepper evaluates the same
   complex affine map of (z, z'), z = u + i v: z'' = x10 z + x11 z' + b1.
 - Magnus exponents: :func:`magnus4` (two Gauss points, one commutator) and
   :func:`magnus6` (three Gauss points, Blanes, Casas & Ros 2000) for real matrices,
-  :func:`magnus4_complex` and :func:`magnus6_complex` for complex affine tuples, and
-  the derivatives of the fourth-order exponent (:func:`magnus4_derivative`,
+  :func:`magnus4_complex` and :func:`magnus6_complex_features` for complex affine
+  tuples, and the derivatives of the fourth-order exponent (:func:`magnus4_derivative`,
   :func:`magnus4_step_derivative`).
 - Chains: :func:`affine_chain` (states x_k of x_{k+1} = phi_k x_k, blocked products),
   :func:`frechet_simpson` (the derivative of a step's exponential applied to the
@@ -287,14 +287,6 @@ def _magnus6_from_alphas(alpha1, alpha2, alpha3) -> tuple:
     return lin((1.0, alpha1), (1.0 / 12.0, alpha3), (1.0 / 240.0, tail))
 
 
-def magnus6_complex(h, X1, X2, X3) -> tuple:
-    """:func:`magnus6` for complex affine tuples."""
-    d1 = lin((1.0, X3), (-1.0, X1))
-    d2 = lin((1.0, X3), (-2.0, X2), (1.0, X1))
-    return _magnus6_from_alphas(lin((h, X2)), lin((_S15 * h / 3.0, d1)),
-                                lin((10.0 * h / 3.0, d2)))
-
-
 def _uniform(x):
     """An array whose entries are all equal as that scalar (cheaper broadcasting)."""
     if x is None or np.ndim(x) == 0:
@@ -327,7 +319,7 @@ def complex_system_features(co: Coefficients) -> tuple:
 
 
 def magnus6_complex_features(h, features, w, wd) -> tuple:
-    """:func:`magnus6_complex` from :func:`complex_system_features` and the profile.
+    """:func:`magnus6` for complex affine tuples, from :func:`complex_system_features`.
 
     ``w[i]``, ``wd[i]``: the speed (rad/s) and acceleration (rad/s^2) at the three
     Gauss points of each step of length ``h`` (s). The differences between Gauss

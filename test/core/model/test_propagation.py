@@ -133,8 +133,9 @@ def test_magnus_is_exact_for_a_constant_matrix_and_of_its_order():
     assert step4 > 0      # the reference is not the method itself
     # the same matrices as complex affine tuples give the same exponent
     iso = Coefficients.from_params(RodParams(damping_ratio=0.02))
-    X = [propagation.complex_system(iso, 2.0 * x * 0.1, 2.0) for x in propagation.GAUSS3]
-    Xc = propagation.magnus6_complex(0.1, *X)
+    w = [2.0 * x * 0.1 for x in propagation.GAUSS3]
+    Xc = propagation.magnus6_complex_features(
+        0.1, propagation.complex_system_features(iso), w, [2.0] * 3)
     R = propagation.magnus6(0.1, *[propagation.system_matrix(iso, 2.0 * x * 0.1, 2.0)
                                    for x in propagation.GAUSS3])
     assert Xc[2] == pytest.approx(R[2, 0] + 1j * R[3, 0], rel=1e-13)
