@@ -153,6 +153,11 @@ NODE_SPECS = (
          'has at least this many subscriptions: with rerun_logger started first, a run '
          'as fast as possible is recorded from its first publication; 0 = at once',
          '', 0, 1000, read_only=True),
+    Spec('start_paused', _NODE.start_paused,
+         'start paused at simulated time 0 (simulation_interfaces STATE_STOPPED), for '
+         'lockstep stepping (~/step_simulation, ~/simulate_steps) or a later play: a '
+         'logger or a controller connects before time starts. Stamps are then simulated '
+         'time, published on /clock', read_only=True),
     Spec('executor', _NODE.executor,
          'rclpy executor for commands, services and parameters: single_threaded | events '
          '(rclpy\'s experimental EventsExecutor: measured worse, see '

@@ -15,8 +15,8 @@ holds a CPU wake-up latency request of ``cpu_dma_latency`` us while paced
 (:mod:`rotrod_core.live.scheduling`).
 
 Paused, the loop steps on request (lockstep): :meth:`RealTimeLoop.request_steps` queues
-a :class:`StepRequest` (any thread), which the loop's thread serves by the rule of
-:meth:`RealTimeLoop.request_steps`; each publication that falls due is published at once,
+a :class:`~rotrod_core.live.lockstep.StepRequest` (any thread), which the loop's thread
+serves by the rule stated there; each publication that falls due is published at once,
 with nothing paced. A loop started paused (``start_paused``) publishes simulated time
 as the clock, so that its stamps are simulated time from 0.
 
@@ -34,10 +34,17 @@ import time
 import traceback
 from collections import deque
 from dataclasses import dataclass
-from typing import Callable, Generic, NamedTuple, TypeVar
+from typing import Generic, NamedTuple, TypeVar
 
 import rotrod_core.live.scheduling as scheduling
 from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.live.lockstep import (
+    STEPS_CANCELLED,
+    STEPS_HALTED,
+    STEPS_NOT_PAUSED,
+    STEPS_STOPPING,
+    StepRequest,
+)
 from rotrod_core.live.pacing import Pacer, StampClock
 from rotrod_core.model.equations import State
 from rotrod_core.numerics.checks import finite_number
@@ -161,50 +168,6 @@ class Status(NamedTuple):
     level: int
     message: str
     values: tuple
-
-
-class StepOutcome(NamedTuple):
-    """How a :class:`StepRequest` ended."""
-
-    completed: int
-    """Steps taken."""
-    problem: str | None
-    """None when every step was taken; else why not (see the STEPS_* reasons)."""
-
-
-STEPS_NOT_PAUSED = 'the simulation is not paused'
-STEPS_CANCELLED = 'cancelled'
-STEPS_STOPPING = 'the simulator is stopping'
-STEPS_HALTED = 'halted'
-"""The reasons a :class:`StepRequest` ends early (the halt's text follows STEPS_HALTED)."""
-
-
-class StepRequest:
-    """Steps asked for while paused; served by the loop's thread (lockstep).
-
-    Args:
-        steps: how many physics steps of 1/physics_rate, >= 1.
-        done: called once in the loop's thread with a :class:`StepOutcome`.
-        progress: called in the loop's thread as ``progress(completed, remaining)``
-            after each run of steps up to a publication instant (every
-            physics_rate/publish_rate steps) that leaves steps to take.
-        cancelled: polled in the loop's thread before each period's steps; true ends
-            the request there (:data:`STEPS_CANCELLED`).
-    """
-
-    def __init__(self, steps: int, done: Callable[[StepOutcome], None], *,
-                 progress: Callable[[int, int], None] | None = None,
-                 cancelled: Callable[[], bool] | None = None):
-        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
-            raise ValueError(f'steps must be a whole number >= 1, got {steps!r}')
-        self.steps = steps
-        self._done = done
-        self._progress = progress or (lambda completed, remaining: None)
-        self._cancelled = cancelled or (lambda: False)
-
-    def finish(self, completed: int, problem: str | None) -> None:
-        """Report how the request ended (once)."""
-        self._done(StepOutcome(completed, problem))
 
 
 class SystemClock:

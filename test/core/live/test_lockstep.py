@@ -1,6 +1,6 @@
-"""Stepping the real-time loop while paused (lockstep), on a clock that never moves.
+"""Step requests (rotrod_core.live.lockstep) served by the paused real-time loop.
 
-Nothing here depends on the wall clock: the loop's thread is this test's (``cycle``),
+On a clock that never moves: nothing here depends on the wall clock; the loop's thread is this test's (``cycle``),
 the clock's waits return at once. One step is 1/physics_rate s of simulated time; a
 publication falls due every physics_rate/publish_rate steps from simulated time 0; a
 command applies at the start of the next request; after a reset of state and time the
@@ -13,14 +13,13 @@ import threading
 import pytest
 
 from rotrod_core.live.engine import EngineConfig, SimulationEngine
-from rotrod_core.live.loop import (
+from rotrod_core.live.lockstep import (
     STEPS_CANCELLED,
     STEPS_HALTED,
     STEPS_NOT_PAUSED,
-    LoopSettings,
-    RealTimeLoop,
     StepRequest,
 )
+from rotrod_core.live.loop import LoopSettings, RealTimeLoop
 
 PHYSICS_RATE = 1000.0
 PUBLISH_RATE = 100.0
