@@ -22,6 +22,7 @@ import argparse
 import math
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -229,11 +230,13 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     finally:
         procs.stop_all()
     wall = time.monotonic() - t0
+    late = late_setpoints(procs.log('simulator'))
     if planned is not None:
         summary = summarize_planned(output, planned, rod_params(values), t_run)
     else:
         summary = summarize(output, eq26, t_run)
     summary['wall_s'] = wall
+    summary['late_setpoints'] = late
     say(summary['table'])
     say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
         f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
@@ -242,9 +245,21 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
             if planned is None else
             f'the hub starts moving {summary["lead_s"] + planned.t_start:.3f} s into the '
             'recording'))
+    if late:
+        say(f'{late} setpoints of the stream reached the simulator after their due time: the '
+            'machine held the stream up for longer than setpoint_delay, and the hub did not '
+            'follow the profile there (the difference from the offline run is that, not '
+            'the simulator\'s accuracy); run again on a quieter machine, or slower '
+            '(--speed 1)')
     say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
         f'with: rerun {output}')
     return summary
+
+
+def late_setpoints(simulator_log: str) -> int | None:
+    """The simulator's count of late setpoints from its stop line (None: not found)."""
+    found = re.search(r'stopped at simulated time .* (\d+) late setpoints', simulator_log)
+    return int(found[1]) if found else None
 
 
 def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict[str, Any]:

@@ -59,6 +59,10 @@ must not be dropped, since the setpoint shaper numbers a stream's samples in ord
 
 COMMAND_TOPICS = ('cmd/omega', 'cmd/torque', 'joint_command')
 """The subscriptions that carry commands."""
+SAMPLE_QOS_DEPTH = 100
+"""Queue depth of the sample topics when paced: a reliable subscriber that falls behind
+(a busy machine's scheduler, a garbage collection) by up to 100 publications (1 s at
+100 Hz) still receives every one; a slower one loses the oldest."""
 
 LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
 """The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
@@ -79,18 +83,19 @@ INTERFACES = (
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
         "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
-        '1/publish_rate of simulated time', keep_all=LOSSLESS),
+        '1/publish_rate of simulated time', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('tip/deflection', messages.Vector3Stamped, "(u, v, 0) m in frame 'rotor' (rotating: "
         'x radial, y tangential), plus Gaussian noise of deflection_noise m (a sensor)',
-        keep_all=LOSSLESS),
+        SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('tip/position', messages.PointStamped, "the mass, m, in frame 'world' (inertial; "
-        'z = rod length)', keep_all=LOSSLESS),
+        'z = rod length)', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('frequencies', DynamicFrequencies, 'f1 <= f2 Hz at the published w (omega, rad/s; '
-        'Eq. 28, or the eigen analysis), stamped as the sample', keep_all=LOSSLESS),
+        'Eq. 28, or the eigen analysis), stamped as the sample', SAMPLE_QOS_DEPTH,
+        keep_all=LOSSLESS),
     pub('frequencies/estimate', WhirlEstimate, 'f1 (forward whirl), f2 (backward) Hz, '
         'their standard deviations, whether each is valid and why not, estimated from the '
         'published (u, v) over the last estimate_window, every 1/estimate_rate; stamped at '
-        "the window's middle, which it describes", keep_all=LOSSLESS),
+        "the window's middle, which it describes", SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('markers', messages.MarkerArray, "disk, rod, mass, trail (frame 'world'), at "
         'marker_rate Hz of simulated time'),
     pub('/diagnostics', messages.DiagnosticArray, 'OK / WARN / ERROR with the reason and '
@@ -282,7 +287,8 @@ class SimulatorNode(Node):
         sent = self._keep_all
         self.get_logger().info(f'stopped at simulated time {self.engine.time:.3f} s after '
                                f'{self.loop.publications} publications ({sent.held_up} held '
-                               f'up by a KEEP_ALL subscriber, {sent.dropped} dropped)')
+                               f'up by a KEEP_ALL subscriber, {sent.dropped} dropped; '
+                               f'{self.engine.late_setpoints} late setpoints)')
 
     # ----------------------------------------------------------------- publishing
     def _publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,

@@ -290,6 +290,11 @@ class SimulationEngine:
         self._reset_watch()
         self.rejected_commands = 0
         self.accepted_commands = 0
+        self.late_setpoints = 0
+        """Angular-velocity setpoints that arrived after their due time (a stall of the
+        stream longer than ``setpoint_delay``): meanwhile w followed the stream's
+        extrapolation, or returned to the last setpoint after the shaper's longest stall,
+        so the shaped w was not the stream's delayed interpolation."""
         self.timeouts = 0
         """Number of command-timeout events so far (see :attr:`timed_out_at`)."""
         self._reset_commands()
@@ -457,10 +462,12 @@ class SimulationEngine:
         w = self._check_command('omega setpoint', setpoint, 'velocity',
                                 self.config.max_omega, 'rad/s')
         t = self._command_time(at)
+        late = self._shaper.late_setpoints
         try:
             self._shaper.command(w, t)
         except ValueError as exc:       # beyond what the shaper can represent
             self._reject(str(exc))
+        self.late_setpoints += self._shaper.late_setpoints - late
         self._accepted(t)
 
     def command_torque(self, torque, at=None) -> None:
@@ -660,6 +667,7 @@ class SimulationEngine:
                 *((f'critical_speed_{k}_rad_s', v) for k, v in self.critical_speeds.items()),
                 ('accepted_commands', self.accepted_commands),
                 ('rejected_commands', self.rejected_commands),
+                ('late_setpoints', self.late_setpoints),
                 ('command_timeout_s', cfg.command_timeout),
                 ('command_age_s', self.command_age), ('command_timeouts', self.timeouts),
                 ('peak_deflection_m', self.peak_deflection),

@@ -258,6 +258,7 @@ class RealTimeLoop(Generic[SettingsT]):
         self.malformed_commands = 0
         """Command messages the host could not read as a command (see :meth:`reject`)."""
         self._drops_logged = 0
+        self._late_logged = 0
         self._timeouts_logged = engine.timeouts
         self._last_level: int | None = None
         self._next_status = 0.0
@@ -395,6 +396,12 @@ class RealTimeLoop(Generic[SettingsT]):
                       f'{self.dropped_commands} dropped so far (the oldest of '
                       f'{PENDING_COMMANDS} pending)', 'dropped', 1.0)
             self._drops_logged = self.dropped_commands
+        if self.engine.late_setpoints != self._late_logged:
+            self._log('warning', f'{self.engine.late_setpoints} angular-velocity setpoints '
+                      'so far arrived after their due time (the stream stalled for longer '
+                      'than setpoint_delay): meanwhile w followed the stream\'s '
+                      'extrapolation', 'late setpoints', 1.0)
+            self._late_logged = self.engine.late_setpoints
 
     def _log_timeout(self) -> None:
         """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""

@@ -26,13 +26,28 @@ def verify(path) -> str:
     return text
 
 
+STALLED = 'setpoints of the stream reached the simulator after their due time'
+"""What ``rotrod demo`` says when the machine held its setpoint stream up (the simulator
+counts the setpoints that arrived after their due time)."""
+
+
 @pytest.fixture(scope='module')
 def demo(tmp_path_factory):
-    """``rotrod demo`` run once: (its recording, the completed process)."""
-    out = tmp_path_factory.mktemp('demo') / 'rotrod.rrd'
-    run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)], capture_output=True,
-                         text=True, timeout=300)
-    assert run.returncode == 0, run.stdout + run.stderr
+    """``rotrod demo``: (its recording, the completed process).
+
+    Run once more if the demo says the machine held its stream up for longer than
+    setpoint_delay (then the hub did not follow Eq. 26 there, and the comparison with
+    the offline run is the machine's, not the simulator's): a shared CI machine
+    sometimes stops processes for a second.
+    """
+    for attempt in (1, 2):
+        out = tmp_path_factory.mktemp('demo') / 'rotrod.rrd'
+        run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)],
+                             capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stdout + run.stderr
+        if STALLED not in run.stdout:
+            break
+        print(f'demo run {attempt}: the stream was held up\n{run.stdout}')
     return out, run
 
 
@@ -61,8 +76,9 @@ def test_the_main_job_end_to_end(demo):
     offline = simulate(RodParams(), profile, 40.0, dt=1e-3)
     du = np.max(np.abs(u[keep] - np.interp(tt, offline.t, offline.u)))
     dv = np.max(np.abs(v[keep] - np.interp(tt, offline.t, offline.v)))
-    assert du <= 0.01 * np.max(offline.u)             # the simulator issue's tolerances
-    assert dv <= 0.05 * np.max(np.abs(offline.v))
+    # the simulator issue's tolerances (the demo's report, if they fail, in the message)
+    assert du <= 0.01 * np.max(offline.u), run.stdout
+    assert dv <= 0.05 * np.max(np.abs(offline.v)), run.stdout
     _, f = recording.read_series(out, recording.F_MODEL)
     assert f.shape[1] == 2
     # the estimate from the motion, stamped at the middle of its 1 s window, tracks

@@ -6,7 +6,9 @@ quasi-static closed form of its own speed.
 """
 
 import ast
+import math
 import os
+import re
 import signal
 import subprocess
 from pathlib import Path
@@ -14,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from geometry_msgs.msg import Vector3Stamped
-from node_probes import by_time
+from node_probes import stamp
 from reference import R0, K, M
 from ros_harness import console_script
 from sensor_msgs.msg import JointState
@@ -31,8 +33,6 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
                                                             tmp_path):
     joint = {ns: ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
              for ns in fleet.namespaces(RODS)}
-    deflection = {ns: ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
-                  for ns in fleet.namespaces(RODS)}
     # the user's one command: `rotrod fleet` (python -m rotrod_ros.fleet underneath)
     # a damped rod (as any real one): the whirl that the streams' start leaves dies out
     # (1 / (zeta w0) = 1.7 s) before w reaches the checked speeds; an undamped rod keeps
@@ -45,21 +45,33 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
     proc.wait_for_output(f'fleet: {RODS} rods running', timeout=60)
     ros_node.spin_until(lambda: all(j and j[-1].velocity[0] > 1.0 for j in joint.values()),
                         60, 'every rod spinning up')
+    for ns in fleet.namespaces(RODS):                # each rod's sensor in its own frame
+        sensed = ros_node.wait_for_messages(f'{ns}/tip/deflection', Vector3Stamped, 3)
+        assert {m.header.frame_id for m in sensed} == {f'{ns[1:]}/rotor'}
     os.kill(proc.pid, signal.SIGINT)            # Ctrl-C: the fleet stops every node
     assert proc.wait(timeout=30) == 0
-    for log in tmp_path.glob('rod*_simulator.log'):
-        assert 'ready' in log.read_text()
     for ns in fleet.namespaces(RODS):
-        rows = by_time(joint[ns], deflection[ns])
-        t, w, u = rows[:, 0], rows[:, 2], rows[:, 4]
-        assert np.max(np.diff(t)) < 0.025                       # 100 Hz, no gap
+        # every rod published at the full rate: one sample per 10 ms of its simulated time
+        # (as its log says on stopping), every publication (KEEP_LAST depth 100) on the
+        # 10 ms grid; the observer of this test, an ordinary Python process sharing two
+        # cores with six real-time ones, may miss some while it waits for a core
+        log = (tmp_path / f'{ns[1:]}_simulator.log').read_text()
+        assert 'ready' in log
+        stopped = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications', log)
+        assert stopped, log[-2000:]
+        t_stop, published = float(stopped[1]), int(stopped[2])
+        assert abs(published - (math.floor(t_stop * 100 + 1e-6) + 1)) <= 1, (t_stop, published)
+        # the true state (u in the tip joint 'tip_radial'), by stamp
+        rows = np.array(sorted((stamp(j), j.velocity[0], j.position[1]) for j in joint[ns]))
+        t, w, u = rows.T
+        steps = np.diff(t) / 0.01
+        assert np.max(np.abs(steps - np.round(steps))) < 1e-3 and np.min(steps) > 0.5
         moving = w > 0.3
         assert moving.sum() > 100
         # Eq. 26 is slow against w0: the tip sits at u_s = m w^2 r0 / (k - m w^2)
         # (rotating damping leaves the static deflection as it is)
         u_s = M * w[moving] ** 2 * R0 / (K - M * w[moving] ** 2)
         assert np.max(np.abs(u[moving] - u_s)) < 0.01 * np.max(u_s) + 2e-6
-        assert {m.header.frame_id for m in deflection[ns]} == {f'{ns[1:]}/rotor'}
 
 
 def test_bad_fleet_sizes_are_refused_with_the_reason():

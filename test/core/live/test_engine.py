@@ -100,6 +100,23 @@ def test_eq26_streamed_at_100_hz_reproduces_the_offline_run(jitter):
     dv = v - np.interp(t - delay, offline.t, offline.v)
     assert np.max(np.abs(du)) <= 0.01 * np.max(offline.u)
     assert np.max(np.abs(dv)) <= 0.05 * np.max(np.abs(offline.v))
+    assert eng.late_setpoints == 0              # the jitter stays within setpoint_delay
+
+
+def test_a_stall_of_the_stream_longer_than_the_delay_is_counted_and_reported():
+    profile = Eq26Profile()
+    eng = SimulationEngine()
+    stall = (10.0, 10.3)                        # s: nothing arrives, then all at once
+    for k in range(1501):
+        arrival = max(k * 0.01, stall[1]) if stall[0] <= k * 0.01 < stall[1] else k * 0.01
+        eng.advance_to(arrival)
+        eng.command_omega(profile.omega(k * 0.01), at=arrival)
+    # late: the setpoints held up past their due time (grid time + setpoint_delay) by
+    # more than half an interval, i.e. sent in the stall's first 0.255 s
+    late_after = stall[1] - eng.config.setpoint_delay + 0.5 * 0.01
+    held_up = sum(1 for k in range(1501) if stall[0] <= k * 0.01 < late_after)
+    assert abs(eng.late_setpoints - held_up) <= 1 and held_up == 26
+    assert dict(eng.status_values())['late_setpoints'] == eng.late_setpoints
 
 
 def test_free_rotation_conserves_angular_momentum_and_energy():
