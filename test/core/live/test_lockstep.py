@@ -1,10 +1,11 @@
 """Step requests (rotrod_core.live.lockstep) served by the paused real-time loop.
 
-On a clock that never moves: nothing here depends on the wall clock; the loop's thread is this test's (``cycle``),
-the clock's waits return at once. One step is 1/physics_rate s of simulated time; a
-publication falls due every physics_rate/publish_rate steps from simulated time 0; a
-command applies at the start of the next request; after a reset of state and time the
-same requests and commands give the same states bit for bit.
+On a clock that never moves: nothing here depends on the wall clock; the loop's
+thread is this test's (``cycle``), the clock's waits return at once. One step is
+1/physics_rate s of simulated time; a publication falls due every
+physics_rate/publish_rate steps from simulated time 0; a command applies at the start
+of the next request; after a reset of state and time the same requests and commands
+give the same states bit for bit.
 """
 
 import struct
