@@ -33,7 +33,12 @@ from simulation_interfaces.srv import (
     StepSimulation,
 )
 
-from rotrod_core.live.lockstep import STEPS_CANCELLED, StepOutcome, StepRequest
+from rotrod_core.live.lockstep import (
+    STEPS_CANCELLED,
+    STEPS_NOT_PAUSED,
+    StepOutcome,
+    StepRequest,
+)
 from rotrod_core.live.loop import RealTimeLoop
 
 from . import messages
@@ -246,8 +251,8 @@ class SimulationControl:
 
         problem = self.loop.request_steps(StepRequest(steps, done, **kwargs))
         if problem is not None:
-            return _result(Result.RESULT_INCORRECT_STATE if problem.startswith('the simulation '
-                           'is not') else Result.RESULT_OPERATION_FAILED, problem)
+            return _result(Result.RESULT_INCORRECT_STATE if problem == STEPS_NOT_PAUSED
+                           else Result.RESULT_OPERATION_FAILED, problem)
         self.stopped = False
         return None
 
@@ -257,6 +262,8 @@ class SimulationControl:
         done = f'{outcome.completed} of {steps} steps taken'
         if outcome.problem == STEPS_CANCELLED:
             return _result(Result.RESULT_OK, f'cancelled: {done}')
+        if outcome.problem == STEPS_NOT_PAUSED:      # played before the request's turn
+            return _result(Result.RESULT_INCORRECT_STATE, f'{outcome.problem}; {done}')
         return _result(Result.RESULT_OPERATION_FAILED, f'{outcome.problem}; {done}')
 
     async def step(self, request, response):
