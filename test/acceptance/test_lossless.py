@@ -67,7 +67,9 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
     assert logger.wait(timeout=60) == 0
     print(f'{published} publications, {t_end:.2f} s of simulated time in about {wall:.1f} s '
           f'of wall time ({t_end / wall:.1f}x real time, with a 1 s stall of the logger)')
-    assert t_end / wall > 5.0              # as fast as possible, not paced
+    # as fast as possible, not paced (paced at 1x, and the logger's 1 s stall holding the
+    # physics up, it would be below 1x; a loaded 2-core machine ran it at 3x)
+    assert t_end / wall > 1.5
 
     offline = simulate(RodParams(hub_inertia=J), torque=0.0, t_end=t_end + STEP, dt=1e-3,
                        initial=INITIAL)
