@@ -2,8 +2,8 @@
 
     python bench/node_cpu_parts.py DURATION [NAME:=VALUE ...]   # prints JSON
 
-Runs ``rotrod_ros.simulator.SimulatorNode`` in this process (the parameters of
-``config/realtime.yaml``, the given ones after), with a timer around each part of its
+Runs ``rotrod_ros.simulator.SimulatorNode`` in this process (its defaults, the given
+parameters over them), with a timer around each part of its
 physics thread's work: the physics steps, each sample topic's message and publication,
 the whirl estimate, the markers' shapes, message and publication, the status check,
 the waits' own overhead. The timers read ``time.thread_time`` (CPU time of the
@@ -60,8 +60,7 @@ def measure(duration: float, params: dict) -> dict:
     import rotrod_ros.messages as messages
     import rotrod_ros.simulator as simulator
 
-    realtime = yaml.safe_load((ROOT / 'config' / 'realtime.yaml').read_text())
-    values = {**next(iter(realtime.values()))['ros__parameters'], **params}
+    values = dict(params)
     spent: Counter = Counter()
     calls: Counter = Counter()
     for fn, label in (('set_joint_state', 'joint_states message'),

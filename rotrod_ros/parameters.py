@@ -13,11 +13,13 @@ before it is taken (the node's on-set callback checks, its post-set callback app
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
+from rotrod_core.live.loop import MAX_PUBLICATION_SPIN
 from rotrod_core.live.publication import PublicationSettings
 from rotrod_core.live.scheduling import MAX_CPU_LATENCY, MAX_PRIORITY
 from rotrod_core.model.equations import COUPLINGS, STATE_FIELDS
@@ -49,6 +51,14 @@ ROD_SPECS = tuple(rod_spec(info) for info in FIELDS)
 _OPTIONAL_ROD_FIELDS = tuple(info.name for info in FIELDS if info.default is None)
 
 
+AUTO_WAIT = -1
+"""``wait_for_subscribers`` by default: wait for one subscription on each sample topic
+when started as fast as possible (see :meth:`NodeSettings.subscriber_wait`)."""
+AUTO_WAIT_TIMEOUT = 10.0
+"""Longest wait of :data:`AUTO_WAIT` for the subscriptions, wall s; then the run starts
+(with a warning naming the topics without one)."""
+
+
 @dataclass(frozen=True)
 class NodeSettings(PublicationSettings):
     """Settings of the node (not of the physics); NODE_SPECS.
@@ -60,7 +70,21 @@ class NodeSettings(PublicationSettings):
     deflection_noise: float = 0.0
     noise_seed: int = 0
     executor: str = 'single_threaded'
-    wait_for_subscribers: int = 0
+    wait_for_subscribers: int = -1
+
+    def subscriber_wait(self) -> tuple[int, float]:
+        """Subscriptions wanted on each sample topic before simulated time starts.
+
+        Returns (how many, the longest wait for them in wall seconds: inf = as long as
+        it takes).
+        ``wait_for_subscribers`` -1 (:data:`AUTO_WAIT`): started as fast as possible, one
+        each for at most :data:`AUTO_WAIT_TIMEOUT` s (a recorder started first gets
+        every sample from t = 0); paced, none. N > 0: N each, however long. 0: none.
+        """
+        wanted = self.wait_for_subscribers
+        if wanted == AUTO_WAIT:
+            return (1, AUTO_WAIT_TIMEOUT) if self.real_time_factor == 0 else (0, 0.0)
+        return wanted, math.inf
 
 
 _ENGINE = EngineConfig()
@@ -151,8 +175,10 @@ NODE_SPECS = (
          'simulated time starts (from 0) once each of joint_states, tip/deflection, '
          'tip/position, frequencies (and frequencies/estimate when estimate_window > 0) '
          'has at least this many subscriptions: with rerun_logger started first, a run '
-         'as fast as possible is recorded from its first publication; 0 = at once',
-         '', 0, 1000, read_only=True),
+         'as fast as possible is recorded from its first publication. -1 (default) = '
+         f'when started as fast as possible (real_time_factor 0) 1, for at most '
+         f'{AUTO_WAIT_TIMEOUT:g} s (then it starts, with a warning), else at once; '
+         'N > 0 = N, however long; 0 = at once', '', AUTO_WAIT, 1000, read_only=True),
     Spec('start_paused', _NODE.start_paused,
          'start paused at simulated time 0 (simulation_interfaces STATE_STOPPED), for '
          'lockstep stepping (~/step_simulation, ~/simulate_steps) or a later play: a '
@@ -175,6 +201,12 @@ NODE_SPECS = (
          'thread wakes at once; idle cores stay busy, costing power); -1 (default) = '
          'leave the machine as it is. Needs root; refused with a warning otherwise',
          'us', -1, MAX_CPU_LATENCY, read_only=True),
+    Spec('publication_spin', _NODE.publication_spin,
+         'while paced, wall time before each publication\'s due time at which the physics '
+         'thread stops sleeping and polls the clock (a sleeping thread may wake late on a '
+         'VM whose idle CPUs halt); costs about publication_spin x publish_rate of a core '
+         '(0.3 ms at 100 Hz: 3 %); ignored while cpu_dma_latency 0 is held; 0 (default) = '
+         'sleep to the due time', 's', 0.0, MAX_PUBLICATION_SPIN),
 )
 
 ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import argparse
 import gc
+import math
 import sys
+import time
 from typing import Any
 
 from rcl_interfaces.msg import SetParametersResult
@@ -137,7 +139,8 @@ class SimulatorNode(Node):
             logger=self.get_logger(), running=self.context.ok,
             inputs={'omega': 'cmd/omega or joint_command',
                     'torque': 'cmd/torque or joint_command'},
-            ready=self._subscribers_ready if settings.wait_for_subscribers else None)
+            ready=self._subscribers_ready if settings.subscriber_wait()[0] else None)
+        self._wait_deadline: float | None = None
         submit = self.loop.submit
         self._control = control = simulation_control.SimulationControl(
             self, self.loop, self._reset, self._world_frame, self._take_pending_commands)
@@ -198,13 +201,27 @@ class SimulatorNode(Node):
                 if t != 'frequencies/estimate' or self.settings.estimate_window]
 
     def _subscribers_ready(self) -> bool:
-        """Whether every sample topic has wait_for_subscribers subscriptions (loop thread)."""
-        wanted = self.settings.wait_for_subscribers
+        """Whether simulated time may start (loop thread).
+
+        Yes once every sample topic has the subscriptions wanted
+        (NodeSettings.subscriber_wait), or when the wait is over.
+        """
+        wanted, longest = self.settings.subscriber_wait()
         topics = self._waited_topics()
-        if any(self._io[t].get_subscription_count() < wanted for t in topics):
+        lacking = [t for t in topics if self._io[t].get_subscription_count() < wanted]
+        if not lacking:
+            self.get_logger().info(f'starting: {wanted} subscription(s) on each of '
+                                   f'{", ".join(topics)}')
+            return True
+        now = time.monotonic()
+        if self._wait_deadline is None:
+            self._wait_deadline = now + longest
+        if now < self._wait_deadline:
             return False
-        self.get_logger().info(f'starting: {wanted} subscription(s) on each of '
-                               f'{", ".join(topics)}')
+        self.get_logger().warning(
+            f'starting after {longest:g} s without {wanted} subscription(s) on '
+            f'{", ".join(lacking)}: a subscriber that comes later misses what was '
+            'published before it (wait_for_subscribers N > 0 waits as long as it takes)')
         return True
 
     # ----------------------------------------------------------------- commands
@@ -348,9 +365,14 @@ def _started(node: SimulatorNode) -> None:
         # busy machine does not delay commands past setpoint_delay either
         scheduling.run_current_thread_at(priority - 1, node.get_logger(), 'executor thread')
     s, c = node.settings, node.engine.config
-    if s.wait_for_subscribers:
-        node.get_logger().info(f'waiting for {s.wait_for_subscribers} subscription(s) on each '
-                               f'of {", ".join(node._waited_topics())} (wait_for_subscribers)')
+    wanted, longest = s.subscriber_wait()
+    if wanted:
+        node.get_logger().info(
+            f'waiting for {wanted} subscription(s) on each of '
+            f'{", ".join(node._waited_topics())} before simulated time starts '
+            f'(wait_for_subscribers {s.wait_for_subscribers}'
+            + (f': as fast as possible, for at most {longest:g} s)'
+               if math.isfinite(longest) else ')'))
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
         f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '

@@ -74,15 +74,12 @@ so its timing does not depend on how long the integration took, nor on a slow
 previous publication (a marker array and a whirl estimate take up to a few ms). A
 command that arrives within this lead applies at most this late. Chosen by
 measurement: docs/realtime.md#lead."""
-SPIN = 0.0003
-"""Wall seconds before a publication's due time at which its thread stops sleeping and
-polls the clock (a sleeping SCHED_FIFO thread may wake late on a VM, a busy one not).
-Costs about SPIN x publish_rate of a core. Not while the thread holds a CPU wake-up
-latency request of at most SLEEP_ONLY_LATENCY: idle CPUs then wake at once. Chosen by
-measurement: docs/realtime.md#spin."""
+MAX_PUBLICATION_SPIN = 0.002
+"""Largest ``publication_spin``, s (a fifth of the default publish period)."""
 SLEEP_ONLY_LATENCY = 0
 """Largest CPU wake-up latency request (us, cpu_dma_latency) under which publications
-only sleep to their due time, without SPIN."""
+only sleep to their due time, whatever ``publication_spin``: idle CPUs then wake at
+once, and a poll would only burn CPU."""
 COMMANDS = ('omega', 'torque')
 """Kinds of command: an angular-velocity setpoint (rad/s) or a hub torque (N m)."""
 
@@ -100,6 +97,11 @@ class LoopSettings:
         diagnostics_rate: status reports per wall second, Hz (also on a change of level).
         realtime_priority: SCHED_FIFO priority of the thread while paced (0: ordinary).
         cpu_dma_latency: CPU wake-up latency requested while paced, us (-1: none).
+        publication_spin: wall seconds before each publication's due time at which the
+            thread stops sleeping and polls the clock, s (0: sleep to the due time).
+            A sleeping SCHED_FIFO thread may wake late on a VM whose idle vCPUs halt,
+            a busy one not; it costs about ``publication_spin x publish_rate`` of a
+            core (0.3 ms at 100 Hz: 3 %), so it is opt-in (docs/realtime.md#spin).
         start_paused: start with simulated time standing still at 0, for stepping
             (:meth:`RealTimeLoop.request_steps`) or a later resume; the stamps are
             then simulated time, published as the clock.
@@ -112,12 +114,17 @@ class LoopSettings:
     diagnostics_rate: float = 1.0
     realtime_priority: int = 50
     cpu_dma_latency: int = -1
+    publication_spin: float = 0.0
     start_paused: bool = False
 
     def __post_init__(self):
         for name in ('publish_rate', 'marker_rate', 'diagnostics_rate'):
             finite_number(name, getattr(self, name), positive=True)
         finite_number('real_time_factor', self.real_time_factor, nonnegative=True)
+        spin = finite_number('publication_spin', self.publication_spin, nonnegative=True)
+        if spin > MAX_PUBLICATION_SPIN:
+            raise ValueError(f'publication_spin must be in [0, {MAX_PUBLICATION_SPIN:g}] s, '
+                             f'got {spin!r}')
         for name, low, high in (('realtime_priority', 0, scheduling.MAX_PRIORITY),
                                 ('cpu_dma_latency', -1, scheduling.MAX_CPU_LATENCY)):
             value = getattr(self, name)
@@ -182,7 +189,7 @@ class SystemClock:
         return event.wait(timeout)
 
     @staticmethod
-    def sleep_until(due: float, stop: threading.Event, spin: float = SPIN) -> bool:
+    def sleep_until(due: float, stop: threading.Event, spin: float = 0.0) -> bool:
         """Return at monotonic time ``due``: sleep, then poll for the last ``spin`` s.
 
         False if ``stop`` is set meanwhile.
@@ -299,9 +306,11 @@ class RealTimeLoop(Generic[SettingsT]):
 
     @property
     def _spin(self) -> float:
-        """SPIN, or 0 while a CPU wake-up latency of at most SLEEP_ONLY_LATENCY is held."""
+        """publication_spin; 0 while a CPU wake-up latency <= SLEEP_ONLY_LATENCY is held."""
         held = self._scheduling.cpu_latency
-        return 0.0 if held is not None and held <= SLEEP_ONLY_LATENCY else SPIN
+        if held is not None and held <= SLEEP_ONLY_LATENCY:
+            return 0.0
+        return self.settings.publication_spin
 
     @property
     def _marker_every(self) -> int:

@@ -464,8 +464,9 @@ def test_markers_show_disk_rod_mass_and_a_bounded_trail_at_a_viewable_rate(
     viewer shows them in wall time), while the state goes on at every 10 ms."""
     from visualization_msgs.msg import Marker, MarkerArray
     ns = namespace(request)
+    # as fast as possible at once (by default it would wait for subscribers first)
     start_simulator(ros_processes, ns, real_time_factor=factor, marker_rate=10.0,
-                    marker_trail_length=15)
+                    marker_trail_length=15, wait_for_subscribers=0)
     markers = collect(ros_node, f'{ns}/markers', MarkerArray)
     joint = collect(ros_node, f'{ns}/joint_states', JointState)
     ros_node.spin_until(lambda: len(markers) >= 3, 30, 'markers')

@@ -24,7 +24,6 @@ from rotrod_core.live.loop import (
     LEAD,
     MAX_BACKLOG,
     PENDING_COMMANDS,
-    SPIN,
     LoopSettings,
     RealTimeLoop,
 )
@@ -433,7 +432,8 @@ def test_a_failing_publication_is_reported_and_ends_the_loop():
 @pytest.mark.parametrize('name, value', [
     ('publish_rate', 0.0), ('real_time_factor', -1.0), ('real_time_factor', float('nan')),
     ('marker_rate', float('inf')), ('realtime_priority', 100), ('realtime_priority', 5.0),
-    ('cpu_dma_latency', -2),
+    ('cpu_dma_latency', -2), ('publication_spin', -1e-4), ('publication_spin', 0.01),
+    ('publication_spin', float('nan')),
 ])
 def test_bad_settings_are_refused_with_the_name(name, value):
     with pytest.raises(ValueError, match=name):
@@ -487,7 +487,7 @@ def test_real_time_priority_while_paced_only_and_the_clock_starts_after_the_chan
     assert asked == [30, 0, 40]                 # ordinary as fast as possible; 40 once
 
 
-def test_publications_only_sleep_while_idle_cpus_are_held_awake(tmp_path):
+def test_publications_sleep_and_poll_only_when_asked_and_not_while_cpus_are_held_awake(tmp_path):
     device = tmp_path / 'cpu_dma_latency'
     device.write_bytes(b'')
     run = Run(cpu_dma_latency=0)
@@ -499,7 +499,19 @@ def test_publications_only_sleep_while_idle_cpus_are_held_awake(tmp_path):
                          dataclasses.replace(run.loop.settings, cpu_dma_latency=-1))
     n = len(run.clock.spins)
     run.until_wall(0.4)
-    assert len(run.clock.spins) - n >= 19 and set(run.clock.spins[n + 1:]) == {SPIN}
+    # by default a publication only sleeps to its due time, with or without the request
+    assert len(run.clock.spins) - n >= 19 and set(run.clock.spins[n + 1:]) == {0.0}
+    # the opt-in poll, only while no request of at most SLEEP_ONLY_LATENCY is held
+    run.loop.reconfigure(run.engine.config,
+                         dataclasses.replace(run.loop.settings, publication_spin=3e-4))
+    n = len(run.clock.spins)
+    run.until_wall(0.6)
+    assert len(run.clock.spins) - n >= 19 and set(run.clock.spins[n + 1:]) == {3e-4}
+    run.loop.reconfigure(run.engine.config,
+                         dataclasses.replace(run.loop.settings, cpu_dma_latency=0))
+    n = len(run.clock.spins)
+    run.until_wall(0.8)
+    assert len(run.clock.spins) - n >= 19 and set(run.clock.spins[n + 1:]) == {0.0}
     assert all(sent == s.due for sent, s in run.samples)
 
 
