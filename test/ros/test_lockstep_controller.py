@@ -21,7 +21,7 @@ from rotrod_core.model.params import RodParams
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
-DURATION = 2.0
+DURATION = 1.0
 CONTROL_STEPS = 10
 OMEGA_TARGET = 2.0
 RATE = 1.0
