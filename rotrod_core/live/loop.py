@@ -306,7 +306,11 @@ class RealTimeLoop(Generic[SettingsT]):
 
     @property
     def _spin(self) -> float:
-        """publication_spin; 0 while a CPU wake-up latency <= SLEEP_ONLY_LATENCY is held."""
+        """The poll before each publication, s.
+
+        ``publication_spin``, or 0 while a CPU wake-up latency of at most
+        SLEEP_ONLY_LATENCY is held.
+        """
         held = self._scheduling.cpu_latency
         if held is not None and held <= SLEEP_ONLY_LATENCY:
             return 0.0
