@@ -4,9 +4,9 @@
 #   ./run.sh test [pytest args]   set up .venv if needed, then lint, type-check and run the tests
 # The virtual environment is created on first use and reused while constraints.txt
 # and setup.py are unchanged. Everything comes from PyPI with exact pins. The message
-# package rotrod_interfaces/ is built into it (tools/build_interfaces.py: cmake, ninja
-# and the ROS build wheels from PyPI, a C/C++ compiler from the system) whenever its
-# files change.
+# packages rotrod_interfaces/ and simulation_interfaces/ are built into it
+# (tools/build_interfaces.py: cmake, ninja and the ROS build wheels from PyPI, a C/C++
+# compiler from the system) whenever their files change.
 set -euo pipefail
 cd "$(dirname "$0")"
 ROOT=$(pwd)
@@ -39,7 +39,7 @@ setup_venv() {
 }
 
 build_interfaces() {
-  # rotrod_interfaces' messages and action, built only when its files changed
+  # rotrod_interfaces and simulation_interfaces, each built only when its files changed
   "$VENV/bin/python" tools/build_interfaces.py --prefix "$VENV"
 }
 

@@ -17,6 +17,7 @@ CONSOLE_SCRIPTS = [
     'profile_publisher = rotrod_ros.profile_publisher:main',
     'rerun_logger = rotrod_ros.rerun_logger:main',
     'rig_monitor = rotrod_ros.rig_monitor:main',
+    'lockstep_controller = rotrod_ros.lockstep_controller:main',
 ]
 
 setup(

@@ -12,16 +12,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 PUBLISHER, SUBSCRIPTION, SERVICE, ACTION = 'pub', 'sub', 'srv', 'action'
+CLIENT, ACTION_CLIENT = 'client', 'action client'
+"""A service or action another node serves, which this one calls."""
 ALWAYS = 'always'
 """Interface.keep_all: KEEP_ALL history whatever the node's settings."""
 
 
 @dataclass(frozen=True)
 class Interface:
-    """One topic the node publishes or subscribes to, or a service or action it serves."""
+    """A topic the node publishes or subscribes to, a service or action it serves or calls.
+
+    The name of a client may hold ``{placeholders}`` that the node fills in (see
+    :func:`create`), e.g. ``{simulator}/step_simulation``.
+    """
 
     kind: str
-    """PUBLISHER, SUBSCRIPTION, SERVICE or ACTION."""
+    """PUBLISHER, SUBSCRIPTION, SERVICE, ACTION, CLIENT or ACTION_CLIENT."""
     name: str
     type: type
     """The message or service class."""
@@ -37,9 +43,9 @@ class Interface:
     blocks (rmw_fastrtps: 100 ms, then fails) until it catches up."""
 
     def __post_init__(self):
-        if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE, ACTION):
-            raise ValueError(f'{self.name}: kind must be pub, sub, srv or action, got '
-                             f'{self.kind!r}')
+        if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE, ACTION, CLIENT, ACTION_CLIENT):
+            raise ValueError(f'{self.name}: kind must be pub, sub, srv, action, client or '
+                             f'action client, got {self.kind!r}')
 
     @property
     def type_name(self) -> str:
@@ -69,6 +75,16 @@ def action(name: str, action_type: type, description: str) -> Interface:
     return Interface(ACTION, name, action_type, description)
 
 
+def client(name: str, srv_type: type, description: str) -> Interface:
+    """A service the node calls."""
+    return Interface(CLIENT, name, srv_type, description)
+
+
+def action_client(name: str, action_type: type, description: str) -> Interface:
+    """An action the node sends goals to."""
+    return Interface(ACTION_CLIENT, name, action_type, description)
+
+
 def qos(interface: Interface, conditions=()):
     """The topic's QoS (reliable, volatile), or its depth for rclpy's default.
 
@@ -83,13 +99,18 @@ def qos(interface: Interface, conditions=()):
     return interface.depth
 
 
-def create(node, interfaces, callbacks: dict | None = None, conditions=()) -> dict:
+def create(node, interfaces, callbacks: dict | None = None, conditions=(),
+           callback_groups: dict | None = None, names: dict | None = None) -> dict:
     """Create ``interfaces`` on ``node`` (rclpy); return them by name.
 
     ``callbacks`` holds each subscription's and service's callback, by name, and each
     action's ActionServer keyword arguments (execute_callback, ...); ``conditions`` the
-    ``keep_all`` conditions that hold (see :func:`qos`).
+    ``keep_all`` conditions that hold (see :func:`qos`); ``callback_groups`` a service's
+    callback group by name (default: the node's); ``names`` the values of the
+    placeholders in clients' names. The result is keyed by the names in the table.
     """
+    groups = callback_groups or {}
+    fill = names or {}
     callbacks = callbacks or {}
     made = {}
     for i in interfaces:
@@ -99,7 +120,13 @@ def create(node, interfaces, callbacks: dict | None = None, conditions=()) -> di
             made[i.name] = node.create_subscription(i.type, i.name, callbacks[i.name],
                                                     qos(i, conditions))
         elif i.kind == SERVICE:
-            made[i.name] = node.create_service(i.type, i.name, callbacks[i.name])
+            made[i.name] = node.create_service(i.type, i.name, callbacks[i.name],
+                                               callback_group=groups.get(i.name))
+        elif i.kind == CLIENT:
+            made[i.name] = node.create_client(i.type, i.name.format(**fill))
+        elif i.kind == ACTION_CLIENT:
+            from rclpy.action import ActionClient
+            made[i.name] = ActionClient(node, i.type, i.name.format(**fill))
         else:
             from rclpy.action import ActionServer
             made[i.name] = ActionServer(node, i.type, i.name, **callbacks[i.name])
@@ -113,7 +140,8 @@ def help_lines(interfaces) -> list:
     """``--help`` lines: the interfaces by kind, with type and content."""
     out = []
     for kind, title in ((SUBSCRIPTION, 'Subscriptions'), (PUBLISHER, 'Publications'),
-                        (SERVICE, 'Services'), (ACTION, 'Actions')):
+                        (SERVICE, 'Services'), (ACTION, 'Actions'),
+                        (CLIENT, 'Services called'), (ACTION_CLIENT, 'Actions called')):
         rows = [i for i in interfaces if i.kind == kind]
         if rows:
             out.append(f'{title}:')

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 
 from builtin_interfaces.msg import Time
@@ -31,6 +32,12 @@ def stamp(seconds: float) -> Time:
     """builtin_interfaces/Time for a time in seconds (>= 0)."""
     sec, nanosec = stamp_parts(seconds)
     return Time(sec=sec, nanosec=nanosec)
+
+
+def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of the rotation by ``yaw`` rad about z."""
+    half = 0.5 * yaw
+    return 0.0, 0.0, math.sin(half), math.cos(half)
 
 
 def to_seconds(t: Time) -> float:

@@ -12,8 +12,16 @@ import sys
 
 from rotrod_core.reporting.bag import interface_definitions
 
-from . import profile_publisher, rerun_logger, rig_monitor, simulator
-from .interfaces import ACTION, ALWAYS, PUBLISHER, SERVICE, SUBSCRIPTION
+from . import lockstep_controller, profile_publisher, rerun_logger, rig_monitor, simulator
+from .interfaces import (
+    ACTION,
+    ACTION_CLIENT,
+    ALWAYS,
+    CLIENT,
+    PUBLISHER,
+    SERVICE,
+    SUBSCRIPTION,
+)
 from .parameter_specs import format_value, range_text
 from .parameters import ALL_SPECS as SIMULATOR_SPECS
 
@@ -23,11 +31,14 @@ NODES = (
      profile_publisher.READ_ONLY),
     ('rerun_logger', rerun_logger, rerun_logger.PARAMETERS, rerun_logger.READ_ONLY),
     ('rig_monitor', rig_monitor, rig_monitor.ALL_SPECS, rig_monitor.READ_ONLY),
+    ('lockstep_controller', lockstep_controller, lockstep_controller.PARAMETERS,
+     lockstep_controller.READ_ONLY),
 )
 """Each executable: its name, module (NODE_NAME, INTERFACES, docstring), parameter
 specs, and whether all its parameters are read-only (None: each spec says)."""
 
-KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv', ACTION: 'action'}
+KINDS = {SUBSCRIPTION: 'sub', PUBLISHER: 'pub', SERVICE: 'srv', ACTION: 'action',
+         CLIENT: 'calls srv', ACTION_CLIENT: 'calls action'}
 
 
 def _cell(text: str) -> str:
@@ -43,7 +54,7 @@ def node_section(executable: str, module, specs, read_only: bool | None) -> list
              '| interface | type | content (SI units) |', '|---|---|---|']
     order = {kind: n for n, kind in enumerate(KINDS)}
     for i in sorted(module.INTERFACES, key=lambda i: order[i.kind]):
-        qos = (f' (QoS depth {i.depth})' if i.kind not in (SERVICE, ACTION) and i.depth != 10
+        qos = (f' (QoS depth {i.depth})' if i.kind in (PUBLISHER, SUBSCRIPTION) and i.depth != 10
                else '')
         if i.keep_all:
             qos = (' (QoS KEEP_ALL)' if i.keep_all == ALWAYS else

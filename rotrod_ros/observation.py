@@ -4,7 +4,7 @@ The deflection sensor's noise, the whirl-frequency estimator over the published
 motion, and the recent tip positions the markers draw as a trail: kept from one
 sample to the next, made from the node's settings (:class:`NodeSettings`), remade
 when a parameter they depend on changes (:meth:`Observation.reconfigure`) and started
-afresh on ``~/reset`` (:meth:`Observation.reset`).
+afresh on a reset (:meth:`Observation.reset`).
 """
 
 from __future__ import annotations
@@ -49,14 +49,18 @@ class Observation:
         if new.marker_trail_length != old.marker_trail_length:
             self._trail = deque(self._trail, maxlen=max(1, new.marker_trail_length))
 
-    def reset(self, settings: NodeSettings) -> None:
-        """Start afresh: no trail, a new estimator.
+    def reset(self, settings: NodeSettings, noise: bool = False) -> None:
+        """Start afresh: no trail, a new estimator; with ``noise``, the noise sequence too.
 
         A new estimator rather than its reset in place: the physics thread may be
-        pushing into the current one (its tick's snapshot) meanwhile.
+        pushing into the current one (its tick's snapshot) meanwhile. The noise from
+        its seed again makes a full reset (ResetSimulation) replay the published
+        deflection as well as the state.
         """
         self._trail.clear()
         self.estimator = whirl_estimator(settings)
+        if noise:
+            self._noise = np.random.default_rng(settings.noise_seed)
 
     def deflection(self, u: float, v: float, noise: float) -> tuple[float, float]:
         """The tip deflection (u, v) as the sensor reads it, m.

@@ -179,6 +179,11 @@ NODE_SPECS = (
          f'when started as fast as possible (real_time_factor 0) 1, for at most '
          f'{AUTO_WAIT_TIMEOUT:g} s (then it starts, with a warning), else at once; '
          'N > 0 = N, however long; 0 = at once', '', AUTO_WAIT, 1000, read_only=True),
+    Spec('start_paused', _NODE.start_paused,
+         'start paused at simulated time 0 (simulation_interfaces STATE_STOPPED), for '
+         'lockstep stepping (~/step_simulation, ~/simulate_steps) or a later play: a '
+         'logger or a controller connects before time starts. Stamps are then simulated '
+         'time, published on /clock', read_only=True),
     Spec('executor', _NODE.executor,
          'rclpy executor for commands, services and parameters: single_threaded | events '
          '(rclpy\'s experimental EventsExecutor: measured worse, see '

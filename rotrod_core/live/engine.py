@@ -40,6 +40,7 @@ from rotrod_core.model.equations import (
     check_rotary_inertia,
     make_state,
 )
+from rotrod_core.model.kinematics import TipMotion, tip_motion
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import NonFiniteStateError, finite_number
 
@@ -273,10 +274,11 @@ class Health:
 class SimulationEngine:
     """One rod simulated in fixed steps on its own clock, driven by timestamped commands.
 
-    The simulated clock :attr:`time` (s) starts at 0 and only moves forward (a reset
-    returns the state, not the clock, to the start). Commands may carry a time ``at``
-    (s, not before :attr:`time`): they take effect then, so a front end that advances
-    in batches of steps still applies each command at the instant it arrived.
+    The simulated clock :attr:`time` (s) starts at 0 and only moves forward, but for
+    :meth:`reset_time` (:meth:`reset` returns the state, not the clock, to the start).
+    Commands may carry a time ``at`` (s, not before :attr:`time`): they take effect
+    then, so a front end that advances in batches of steps still applies each command
+    at the instant it arrived.
     """
 
     def __init__(self, config: EngineConfig | None = None):
@@ -400,6 +402,14 @@ class SimulationEngine:
         """Position (x, y, z) of the mass in the inertial frame, m (z = rod length)."""
         x, y = self._stepper.inertial_position()
         return x, y, float(self.config.params.rod_length)
+
+    def tip_motion(self) -> TipMotion:
+        """The tip mass's pose, velocity and acceleration in the world frame (SI units).
+
+        w' is the hub's over the last step (:attr:`omega_dot`).
+        """
+        return tip_motion(self._stepper.coefficients, self.state, self._omega_dot,
+                          float(self.config.params.rod_length))
 
     def energy(self) -> float:
         """Total mechanical energy, J."""
@@ -579,6 +589,19 @@ class SimulationEngine:
         """Back to the configured initial state (clock keeps running); clears a halt."""
         self._stepper.set_state(**self.config.initial_state._asdict())
         self.halted = None
+        self._reset_commands()
+        self._reset_watch()
+
+    def reset_time(self) -> None:
+        """Simulated time back to 0, keeping the state; commands start afresh.
+
+        The setpoint shaper and the torque schedule hold times: they restart from the
+        current motion (velocity drive holds the current w, torque drive has zero
+        torque), as after :meth:`reset`; the command timeout and the deflection watch
+        count from 0. With :meth:`reset` too, the session is as at its start.
+        """
+        self._origin, self._steps = 0.0, 0
+        self._stepper.time = 0.0
         self._reset_commands()
         self._reset_watch()
 

@@ -14,6 +14,12 @@ off. The thread runs under SCHED_FIFO at ``realtime_priority`` where permitted, 
 holds a CPU wake-up latency request of ``cpu_dma_latency`` us while paced
 (:mod:`rotrod_core.live.scheduling`).
 
+Paused, the loop steps on request (lockstep): :meth:`RealTimeLoop.request_steps` queues
+a :class:`~rotrod_core.live.lockstep.StepRequest` (any thread), which the loop's thread
+serves by the rule stated there; each publication that falls due is published at once,
+with nothing paced. A loop started paused (``start_paused``) publishes simulated time
+as the clock, so that its stamps are simulated time from 0.
+
 Time comes from a clock object (:class:`SystemClock`; a test passes a fake one, whose
 waits move its time, to run the loop deterministically with :meth:`RealTimeLoop.cycle`).
 Messages are the host's business: the loop calls ``publish(sample, settings, config,
@@ -32,6 +38,13 @@ from typing import Generic, NamedTuple, TypeVar
 
 import rotrod_core.live.scheduling as scheduling
 from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.live.lockstep import (
+    STEPS_CANCELLED,
+    STEPS_HALTED,
+    STEPS_NOT_PAUSED,
+    STEPS_STOPPING,
+    StepRequest,
+)
 from rotrod_core.live.pacing import Pacer, StampClock
 from rotrod_core.model.equations import State
 from rotrod_core.numerics.checks import finite_number
@@ -89,6 +102,9 @@ class LoopSettings:
             A sleeping SCHED_FIFO thread may wake late on a VM whose idle vCPUs halt,
             a busy one not; it costs about ``publication_spin x publish_rate`` of a
             core (0.3 ms at 100 Hz: 3 %), so it is opt-in (docs/realtime.md#spin).
+        start_paused: start with simulated time standing still at 0, for stepping
+            (:meth:`RealTimeLoop.request_steps`) or a later resume; the stamps are
+            then simulated time, published as the clock.
     """
 
     publish_rate: float = 100.0
@@ -99,6 +115,7 @@ class LoopSettings:
     realtime_priority: int = 50
     cpu_dma_latency: int = -1
     publication_spin: float = 0.0
+    start_paused: bool = False
 
     def __post_init__(self):
         for name in ('publish_rate', 'marker_rate', 'diagnostics_rate'):
@@ -123,8 +140,12 @@ class LoopSettings:
 
     @property
     def publishes_clock(self) -> bool:
-        """Whether simulated time is published as a clock (real_time_factor != 1)."""
-        return self.real_time_factor != 1.0
+        """Whether simulated time is published as a clock.
+
+        When real_time_factor != 1, or started paused (a stepped simulation's time is
+        its own).
+        """
+        return self.real_time_factor != 1.0 or self.start_paused
 
 
 SettingsT = TypeVar('SettingsT', bound=LoopSettings)
@@ -221,7 +242,10 @@ class RealTimeLoop(Generic[SettingsT]):
         self.lock = threading.RLock()
         """Held while the engine or the loop's state changes (re-entrant)."""
         self._stop = threading.Event()
-        self.paused = False
+        self.paused = settings.start_paused
+        self._step_requests: deque[StepRequest] = deque()
+        self.steps_taken = 0
+        """Physics steps taken on request (:meth:`request_steps`) so far."""
         self.overruns = 0
         """Times the thread fell more than MAX_BACKLOG behind and skipped ahead."""
         self.publications = 0
@@ -295,6 +319,10 @@ class RealTimeLoop(Generic[SettingsT]):
     @property
     def _marker_every(self) -> int:
         return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
+
+    def stamp_now(self) -> float:
+        """The stamp time of the current simulated time, s (lock held)."""
+        return self._stamps.stamp(self.engine.time)
 
     def _restart_clock(self) -> None:
         """Re-anchor the wall-to-simulated mapping at the current instant."""
@@ -420,17 +448,24 @@ class RealTimeLoop(Generic[SettingsT]):
                 self._restart_clock()
             self._countdown = min(self._countdown, self._publish_steps)
 
-    def reset(self) -> tuple:
-        """Back to the initial state; clears a halt and the pending commands.
+    def reset(self, state: bool = True, time: bool = False) -> tuple:
+        """Back to the initial ``state`` (clears a halt) and/or simulated ``time`` 0.
 
-        Returns (the halt cleared or None, the simulated time). The publication grid
-        goes on, so the first state after the reset is stamped after any publication
-        the thread still has to send from before it.
+        Either way the pending commands are dropped (superseded). Returns (the halt
+        cleared or None, the simulated time). With the state alone the publication
+        grid goes on, so the first state after the reset is stamped after any
+        publication the thread still has to send from before it. With the time, the
+        grid starts again: the state at 0 is published first (at once, or with the
+        next step while paused), and what follows replays a run from the start.
         """
         with self.lock:
-            self._commands.clear()           # superseded by the reset
-            was_halted = self.engine.halted
-            self.engine.reset()
+            self._commands.clear()
+            was_halted = self.engine.halted if state else None
+            if time:
+                self.engine.reset_time()
+                self._countdown = 0
+            if state:
+                self.engine.reset()
             self._restart_clock()
             return was_halted, self.engine.time
 
@@ -445,6 +480,81 @@ class RealTimeLoop(Generic[SettingsT]):
                 self._restart_clock()
                 return f'resumed at simulated time {self.engine.time:.3f} s'
             return 'already ' + ('paused' if self.paused else 'running')
+
+    # ----------------------------------------------------------------- lockstep
+    def request_steps(self, request: StepRequest) -> str | None:
+        """Queue ``request`` (any thread); None, or why it cannot be (not paused, halted).
+
+        The rule (lockstep): the loop's thread serves requests one at a time, in the
+        order they came. At a request's start, every command that has arrived
+        (:meth:`submit`) is applied, in arrival order, at the current simulated time,
+        i.e. before the first step; commands arriving during a request wait for the
+        next one. A parameter change (:meth:`reconfigure`) takes effect when made,
+        between requests (one made during a request waits for its end: the request
+        holds the lock). Then the steps are taken; each publication that falls due (every
+        physics_rate/publish_rate steps, counted from simulated time 0 or the last
+        reset of time, and the state at that instant if not yet published) is
+        published at once. Nothing depends on the wall clock, so the same requests
+        and commands from the same state give the same states, bit for bit.
+        """
+        with self.lock:
+            if self._stop.is_set():
+                return STEPS_STOPPING
+            if not self.paused:
+                return STEPS_NOT_PAUSED
+            if self.engine.halted:
+                return f'{STEPS_HALTED}: {self.engine.halted}; reset first'
+            self._step_requests.append(request)
+        self._command_arrived.set()                     # wake the thread
+        return None
+
+    def _serve_steps(self, request: StepRequest) -> None:
+        """Take a request's steps and publish what falls due (the loop's thread).
+
+        Under the lock throughout: a service or parameter change waits for the end.
+        """
+        eng = self.engine
+        completed, problem = 0, None
+        with self.lock:
+            if not self.paused:
+                problem = STEPS_NOT_PAUSED
+            else:
+                self._apply_commands()
+            while problem is None:
+                if self._countdown == 0:                  # due, not yet published
+                    self._publish_now(self._sample())
+                    self._countdown = self._publish_steps
+                if completed == request.steps:
+                    break
+                if completed:
+                    request._progress(completed, request.steps - completed)
+                if request._cancelled():
+                    problem = STEPS_CANCELLED
+                elif self._stop.is_set():
+                    problem = STEPS_STOPPING
+                else:
+                    n = min(self._countdown, request.steps - completed)
+                    done = eng.advance(n)
+                    completed += done
+                    self.steps_taken += done
+                    self._countdown -= done
+                    if done < n:
+                        problem = f'{STEPS_HALTED}: {eng.halted}'
+                        self._logger.error(f'simulation halted: {eng.halted}; reset')
+            self._log_timeout()
+        self.report()
+        request.finish(completed, problem)
+
+    def _publish_now(self, sample: Sample) -> None:
+        """Publish ``sample`` at once, with the current settings (lock held)."""
+        self._published = (sample.time, self.clock.monotonic())
+        self._publish(sample, self.settings, self.engine.config, self._snapshot())
+        self.publications += 1
+
+    def _finish_step_requests(self, problem: str) -> None:
+        """End every queued request with ``problem`` (none is left waiting)."""
+        while self._step_requests:
+            self._step_requests.popleft().finish(0, problem)
 
     # ----------------------------------------------------------------- the thread
     @property
@@ -478,13 +588,20 @@ class RealTimeLoop(Generic[SettingsT]):
             self._logger.fatal(self.failure + '\n' + traceback.format_exc())
             self.report(force=True)
         finally:
+            with self.lock:
+                self._stop.set()            # no request is queued after this
+                self._finish_step_requests(STEPS_STOPPING)
             self._scheduling.release()
 
     def cycle(self) -> bool:
         """One pass: commands, a tick, its publications on time, status, idle to the next.
 
-        Returns False when stopping.
+        Returns False when stopping. A step request queued while paused is served
+        instead (:meth:`request_steps`).
         """
+        if self._step_requests:
+            self._serve_steps(self._step_requests.popleft())
+            return True
         if self._schedule():
             # the clock starts (or goes on) from here: the change and its log lines took
             # tens of ms at the node's start (measured: 44 ms), which the first tick
@@ -523,7 +640,7 @@ class RealTimeLoop(Generic[SettingsT]):
             if markers:
                 self._samples_since_marker = 0
                 self._next_marker_wall = now + 0.5 / self.settings.marker_rate
-        due = self._pacer.wall_time(eng.time) if self._pacer.paced else None
+        due = self._pacer.wall_time(eng.time) if self._pacer.paced and not self.paused else None
         return Sample(due, eng.time, self._stamps.stamp(eng.time), eng.state, eng.torque,
                       eng.frequencies(), eng.inertial_position(), markers)
 
@@ -579,7 +696,7 @@ class RealTimeLoop(Generic[SettingsT]):
         event, clock = self._command_arrived, self.clock
         while not self._stop.is_set():
             left = wake - clock.monotonic()
-            if left <= 0:
+            if left <= 0 or self._step_requests:
                 return True
             event.clear()
             if self._commands:

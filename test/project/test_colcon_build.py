@@ -16,9 +16,10 @@ sourced) and from a directory outside the repository:
   ``share/rotrod/urdf/rotrod.urdf`` and the ament resource marker
   ``share/ament_index/resource_index/packages/rotrod`` exist.
 
-And the message package: with ``rotrod_interfaces/`` named as a base path too, colcon
-builds it (ament_cmake, with the venv's ament and rosidl wheels standing in for a ROS
-install) before ``rotrod``, and its messages import from the install tree.
+And the message packages: with ``rotrod_interfaces/`` and ``simulation_interfaces/``
+named as base paths too, colcon builds them (ament_cmake, with the venv's ament and
+rosidl wheels standing in for a ROS install) before ``rotrod``, and their messages
+import from the install tree.
 """
 
 import configparser
@@ -284,12 +285,13 @@ def test_console_scripts_installed_and_run(colcon_install):
                 assert _under(path, prefix), f'{name}: {mod} imported from {path}'
 
 
-@pytest.mark.long      # about a minute (cmake and the rosidl generators): .ci/run runs it
-def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
-    """``colcon build --base-paths src src/rotrod/rotrod_interfaces`` (docs/usage.md):
-    both packages, in dependency order, with this venv as the ROS install (its ament
-    and rosidl build wheels, cmake and ninja, as tools/build_interfaces.py sets them
-    up); the installed messages import from the install tree and serialize."""
+@pytest.mark.long      # minutes (cmake and the rosidl generators): .ci/run runs it
+def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
+    """``colcon build --base-paths src src/rotrod/rotrod_interfaces
+    src/rotrod/simulation_interfaces`` (docs/usage.md): the three packages, in
+    dependency order, with this venv as the ROS install (its ament and rosidl build
+    wheels, cmake and ninja, as tools/build_interfaces.py sets them up); the installed
+    messages import from the install tree and serialize."""
     ws = tmp_path / 'ws'
     src = ws / 'src' / PACKAGE
     for rel in source_files():
@@ -301,6 +303,7 @@ def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
                AMENT_PREFIX_PATH=str(venv), CMAKE_PREFIX_PATH=str(venv))
     cmd = [str(venv / 'bin' / 'colcon'), '--log-base', str(ws / 'log'), 'build',
            '--base-paths', 'src', f'src/{PACKAGE}/rotrod_interfaces',
+           f'src/{PACKAGE}/simulation_interfaces',
            '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
            '--cmake-args', '-G', 'Ninja', f'-DPython3_EXECUTABLE={sys.executable}',
            '-DBUILD_TESTING=OFF']
@@ -309,7 +312,8 @@ def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
     output = proc.stdout + proc.stderr
     assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
     order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', output)]
-    assert order == ['rotrod_interfaces', PACKAGE]                  # rotrod depends on it
+    assert sorted(order[:2]) == ['rotrod_interfaces', 'simulation_interfaces']
+    assert order[2:] == [PACKAGE]                                   # rotrod depends on both
     prefix = ws / 'install' / 'rotrod_interfaces'
     site = next(prefix.glob('lib/python3*/site-packages'))
     check = ('import rotrod_interfaces.msg as m, rotrod_interfaces.action as a\n'
@@ -324,3 +328,18 @@ def test_colcon_builds_the_interface_package_beside_rotrod(tmp_path):
     assert done.returncode == 0, done.stderr
     first, second = done.stdout.split()
     assert first.startswith(str(site)) and second == 'planned'
+    prefix = ws / 'install' / 'simulation_interfaces'
+    site = next(prefix.glob('lib/python3*/site-packages'))
+    check = ('import simulation_interfaces.srv as s\n'
+             'from rclpy.serialization import serialize_message as m\n'
+             'print(s.__file__); m(s.StepSimulation.Request(steps=3)); '
+             'print(s.ResetSimulation.Request.SCOPE_ALL)')
+    run_env = dict(os.environ, PYTHONPATH=str(site),
+                   LD_LIBRARY_PATH=f'{prefix / "lib"}{os.pathsep}'
+                                   f'{os.environ.get("LD_LIBRARY_PATH", "")}')
+    run_env.pop('_ROS_WHEELS_BOOTSTRAP_COMPLETE', None)
+    done = subprocess.run([sys.executable, '-c', check], cwd=tmp_path, env=run_env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    first, second = done.stdout.split()
+    assert first.startswith(str(site)) and second == '255'

@@ -132,3 +132,16 @@ def test_a_publisher_announces_the_type_and_its_hash(ros_node):
     assert info.topic_type == 'rotrod_interfaces/msg/DynamicFrequencies'
     description = json.loads((SHARE / 'msg' / 'DynamicFrequencies.json').read_text())
     assert str(info.topic_type_hash) == description['type_hashes'][0]['hash_string']
+
+
+def test_a_package_the_venv_imports_from_elsewhere_is_not_built(tmp_path, monkeypatch):
+    """A sourced ROS install's simulation_interfaces (here: a directory on PYTHONPATH)
+    is used instead of a build; the venv's own build is not 'elsewhere'."""
+    assert build_interfaces.provided_elsewhere('simulation_interfaces', PREFIX) is None
+    fake = tmp_path / 'opt_ros' / 'simulation_interfaces'
+    fake.mkdir(parents=True)
+    (fake / '__init__.py').write_text('')
+    monkeypatch.setenv('PYTHONPATH', str(fake.parent))
+    found = build_interfaces.provided_elsewhere('simulation_interfaces', PREFIX)
+    assert found is not None and Path(found).parent == fake
+    assert build_interfaces.stamp_name('simulation_interfaces') != build_interfaces.STAMP

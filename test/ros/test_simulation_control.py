@@ -1,0 +1,164 @@
+"""The simulator through the simulation_interfaces standard, from a client that is not rotrod.
+
+The client (``test/sim_interfaces_client.py``, a separate process) imports rclpy, std_msgs,
+rosgraph_msgs and ``simulation_interfaces`` only. The default run gives it the venv's
+build of ``simulation_interfaces``; the long run builds the package a second time
+into a prefix of its own (tools/build_interfaces.py --install-prefix, cached while
+its sources are unchanged) and gives the client that one alone, Python modules and
+libraries (checked from the client's /proc/self/maps). Type hashes must then agree
+on the wire, as with any client built against the published package.
+
+The simulator runs at real_time_factor 2 with max_angular_acceleration 2 rad/s^2. The
+client pauses, resets (time 0), commands 2 rad/s, takes 2000 steps by the service and
+1000 by the action, sends bad requests, cancels a long SimulateSteps, does the same
+again from a reset, and plays. Checked against definitions, not the code's output:
+one step is 1/physics_rate s, so the stamps are 2 s and 3 s exactly; the hub, at its
+acceleration limit from 0, reaches 2 rad/s within 1 s + setpoint_delay and holds it,
+so that over one step at 3 s it turns by exactly w dt; the tip's velocity is the
+derivative of its position (the trapezoid rule over one step); the second run equals
+the first float for float; each bad request has the standard's code and changes
+nothing.
+"""
+
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+import pytest
+from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
+from simulation_interfaces.srv import SetSimulationState
+
+from rotrod_core import RodParams
+
+pytestmark = pytest.mark.ros
+
+ROOT = Path(__file__).resolve().parents[2]
+CLIENT = Path(__file__).resolve().parents[1] / 'sim_interfaces_client.py'
+PHYSICS_RATE = 1000.0
+OMEGA = 2.0
+SIMULATOR_PARAMS = ('-p', 'real_time_factor:=2.0', '-p', 'max_angular_acceleration:=2.0',
+                    '-p', f'physics_rate:={PHYSICS_RATE}')
+FEATURES = {SimulatorFeatures.ENTITY_STATE_GETTING, SimulatorFeatures.SIMULATION_RESET,
+            SimulatorFeatures.SIMULATION_RESET_TIME, SimulatorFeatures.SIMULATION_RESET_STATE,
+            SimulatorFeatures.SIMULATION_STATE_GETTING,
+            SimulatorFeatures.SIMULATION_STATE_SETTING,
+            SimulatorFeatures.SIMULATION_STATE_PAUSE, SimulatorFeatures.STEP_SIMULATION_SINGLE,
+            SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
+            SimulatorFeatures.STEP_SIMULATION_ACTION}
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6          # action_msgs/GoalStatus
+SEPARATE_PREFIX = Path(sys.prefix) / 'test-cache' / 'simulation_interfaces_client'
+"""Where the long test builds the client's own simulation_interfaces (kept while current)."""
+
+
+def run_client(ros_processes, extra_env=None) -> dict:
+    sim = ros_processes.start_console_script('simulator', '--ros-args', *SIMULATOR_PARAMS)
+    sim.wait_for_output('ready: drive=velocity', timeout=30)
+    client = ros_processes.start([sys.executable, str(CLIENT), '--omega', str(OMEGA)],
+                                 name='sim_interfaces_client', extra_env=extra_env)
+    assert client.wait(timeout=240) == 0, client.output
+    lines = [ln for ln in client.output.splitlines() if ln.startswith('@@REPORT@@')]
+    assert lines, client.output
+    return json.loads(lines[-1][len('@@REPORT@@'):])
+
+
+def check_run(run: dict) -> None:
+    """One run from a full reset: codes, exact times, the hub's speed, the tip's motion."""
+    dt = 1.0 / PHYSICS_RATE
+    assert run['reset'] == Result.RESULT_OK
+    assert run['state_after_reset'] == SimulationState.STATE_STOPPED
+    assert run['step'] == Result.RESULT_OK
+    assert run['state_after_step'] == SimulationState.STATE_PAUSED
+    for key, steps in (('tip_0', 0), ('tip_2000', 2000), ('tip_3000', 3000),
+                       ('tip_3001', 3001)):
+        tip = run[key]
+        assert tip['result'] == Result.RESULT_OK and tip['frame'] == 'world'
+        assert tip['stamp_ns'] == steps * 10**6          # steps x 1 ms, to the nanosecond
+        assert tip['position'][2] == pytest.approx(float(RodParams().rod_length))
+    action = run['action']
+    assert action['accepted'] and action['status'] == SUCCEEDED
+    assert action['result'] == Result.RESULT_OK
+    feedback = action['feedback']
+    assert feedback and all(c + r == 1000 for c, r in feedback)
+    assert [c for c, _ in feedback] == sorted({c for c, _ in feedback})
+    # 2 rad/s reached (2 rad/s^2 from rest: 1 s, plus the setpoint delay) and held
+    for key in ('tip_2000', 'tip_3000', 'tip_3001'):
+        assert run[key]['angular_velocity'] == [0.0, 0.0, pytest.approx(OMEGA, abs=1e-12)]
+    a, b = run['tip_3000'], run['tip_3001']
+    turned = (_yaw(b['orientation']) - _yaw(a['orientation'])) % (2 * math.pi)
+    assert turned == pytest.approx(OMEGA * dt, abs=1e-12)
+    for k in range(3):
+        mean_velocity = (b['position'][k] - a['position'][k]) / dt
+        assert mean_velocity == pytest.approx(0.5 * (a['velocity'][k] + b['velocity'][k]),
+                                              abs=1e-6)
+
+
+def _yaw(q) -> float:
+    """The rotation about z of a quaternion (x, y, z, w) that has no other, rad."""
+    x, y, z, w = q
+    assert x == 0.0 and y == 0.0
+    return 2.0 * math.atan2(z, w)
+
+
+def check_report(report: dict) -> None:
+    assert set(report['features']) == FEATURES
+    assert report['state_at_start'] == SimulationState.STATE_PLAYING
+    assert report['step_while_playing'] == Result.RESULT_INCORRECT_STATE
+    assert report['pause'] == Result.RESULT_OK
+    check_run(report['first'])
+    bad = report['bad']
+    assert bad['codes'] == {
+        'step_0': Result.RESULT_OPERATION_FAILED, 'unknown_entity': Result.RESULT_NOT_FOUND,
+        'scope_spawned': Result.RESULT_FEATURE_UNSUPPORTED,
+        'pause_again': SetSimulationState.Response.ALREADY_IN_TARGET_STATE,
+        'no_world': SetSimulationState.Response.INCORRECT_TRANSITION,
+        'unknown_state': SetSimulationState.Response.INCORRECT_TRANSITION,
+        'quitting': Result.RESULT_FEATURE_UNSUPPORTED,
+        'action_0': Result.RESULT_OPERATION_FAILED}
+    assert bad['unchanged'] and bad['action_0']['status'] == ABORTED
+    cancelled = report['cancelled']
+    assert cancelled['status'] == CANCELED and cancelled['result'] == Result.RESULT_OK
+    assert cancelled['message'].startswith('cancelled: ')
+    assert report['state_after_cancel'] == SimulationState.STATE_PAUSED
+    check_run(report['second'])
+    tips = ('tip_0', 'tip_2000', 'tip_3000', 'tip_3001')
+    assert [report['second'][k] for k in tips] == [report['first'][k] for k in tips]
+    assert report['play'] == Result.RESULT_OK
+    assert report['state_after_play'] == SimulationState.STATE_PLAYING
+    assert report['clock_after_play_ns'] > report['second']['tip_3001']['stamp_ns']
+
+
+def test_a_standard_client_steps_resets_replays_and_plays(ros_processes):
+    report = run_client(ros_processes)
+    check_report(report)
+    venv = Path(sys.prefix).resolve()
+    assert Path(report['module']).resolve().is_relative_to(venv)
+
+
+def _build_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        'build_interfaces', ROOT / 'tools' / 'build_interfaces.py')
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.long      # builds simulation_interfaces once more (minutes; then cached)
+def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes):
+    build = _build_module()
+    build.ensure_built(Path(sys.prefix), package='simulation_interfaces',
+                       install_prefix=SEPARATE_PREFIX, install=False)
+    site = next(SEPARATE_PREFIX.glob('lib/python3*/site-packages'))
+    lib = SEPARATE_PREFIX / 'lib'
+    env = {'PYTHONPATH': os.pathsep.join([str(site), os.environ.get('PYTHONPATH', '')]),
+           'LD_LIBRARY_PATH': os.pathsep.join([str(lib),
+                                               os.environ.get('LD_LIBRARY_PATH', '')])}
+    report = run_client(ros_processes, extra_env=env)
+    check_report(report)
+    separate = SEPARATE_PREFIX.resolve()
+    assert Path(report['module']).resolve().is_relative_to(separate)
+    assert report['libraries'], 'no simulation_interfaces library mapped'
+    for path in report['libraries']:
+        assert Path(path).resolve().is_relative_to(separate), path
