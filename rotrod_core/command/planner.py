@@ -717,8 +717,9 @@ def _search(family: _Family) -> SpinUpProfile:
     """The shortest duration k x DURATION_STEP whose minimax value M is <= 1, and its shape.
 
     M(T) (:meth:`_Problem.minimax`) is bracketed by factors of 1.6 from a first guess,
-    then the bracket is narrowed down to one DURATION_STEP (:func:`_next_duration`).
-    The plan is the shape at the shortest feasible duration, solved to convergence.
+    then the bracket is bisected down to one DURATION_STEP, each solve warm-started
+    from the shape of the nearest duration solved (continuation). The plan is the
+    shape at the shortest feasible duration, solved to convergence.
     The result is checked on
     finer grids; when the check fails, the optimisation grid is refined, or the band's
     worst frequency joins the optimised samples, and the search goes on from the
@@ -735,15 +736,12 @@ def _search(family: _Family) -> SpinUpProfile:
                                     bad + 1), T_max)
     bad = max([bad] + [k for k, m in runs.values.items() if m > 1.0 and k < good])
     for _ in range(8):
-        moved: list[str] = []
         while good - bad > 1:
-            mid = _next_duration(runs, bad, good, moved[-2:])
+            mid = (good + bad) // 2
             if runs.solve(mid) <= 1.0:
                 good = mid
-                moved.append('good')
             else:
                 bad = mid
-                moved.append('bad')
         T = good * DURATION_STEP
         c, _ = family.minimax(T, runs.shapes[good], clear=0.0)     # converged: the plan
         peak, nominal, band, worst = family.check(T, c)
@@ -766,22 +764,6 @@ def _search(family: _Family) -> SpinUpProfile:
     raise ValueError(f'no plan from {family.ws:g} to {family.wf:g} rad/s passed the final '
                      f'check on a finer grid (last tried {good * DURATION_STEP:g} s): the '
                      'constraints are too close to what the linear model can resolve')
-
-
-def _next_duration(runs: _Durations, bad: int, good: int, moved: list) -> int:
-    """The next duration (in DURATION_STEPs) to solve inside the bracket (bad, good).
-
-    Where log M(T) is known at both ends, its linear interpolation to 0 (regula falsi:
-    M is smooth in T near the shortest duration), else, or when the last two steps
-    moved the same end, the middle (bisection, which bounds the number of solves).
-    """
-    middle = (good + bad) // 2
-    low, high = runs.values.get(bad), runs.values.get(good)
-    if (low is None or high is None or not 1.0 < low < math.inf or not 0.0 < high <= 1.0
-            or (len(moved) == 2 and moved[0] == moved[1])):
-        return middle
-    x = math.log(low) / (math.log(low) - math.log(high))
-    return min(max(round(bad + x * (good - bad)), bad + 1), good - 1)
 
 
 def _feasible_from(runs: _Durations, k: int, T_max: float) -> int:
