@@ -62,7 +62,8 @@ def main():
     for name in names:
         for label, _ in SETTINGS:
             T, peak, acc, seconds = results[label][name]
-            print(f'| {name} | {label} | {T:.6f} | {peak * 1e3:.9f} | {acc:.9g} '
+            cell = name.replace('|', '\\|')
+            print(f'| {cell} | {label} | {T:.6f} | {peak * 1e3:.9f} | {acc:.9g} '
                   f'| {seconds:.1f} |')
     return 0
 
