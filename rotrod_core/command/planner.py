@@ -10,23 +10,26 @@ Method (docs/planner.md): for a given w(t) the deflection equations are linear, 
 the end state of the run fixes the free vibration that follows in closed form: its
 offset from the static deflection, split on the eigenvectors of the constant-speed
 state matrix, gives the two whirls and their amplitudes. w(t) is a clamped cubic
-B-spline (w' = 0 at both ends). For a fixed duration its free control points are
-found by constrained Gauss-Newton steps on the whirl components (then, if needed,
-SLSQP on the largest residual), subject to the deflection and acceleration limits,
-with exact gradients from a forward sensitivity of the fourth-order Magnus
-propagator. The duration is found by bracketing and bisection on feasibility, and
-the result is checked afterwards on finer grids (time steps and the robust band).
+B-spline (w' = 0 at both ends). At a fixed duration T its free control points
+minimise the largest of the constraint ratios (every band sample's whirl, every grid
+node's deflection, each as a squared norm over its limit), within the acceleration
+bound: a minimax problem solved to convergence by sequential quadratic programming
+with the ratios' Gauss-Newton curvature, from the exact gradients of a forward
+sensitivity of the fourth-order Magnus propagator. Its value M(T) decides
+feasibility (M <= 1); the duration is the shortest whole number of milliseconds
+found feasible by bracketing and bisection, each solve warm-started from the
+nearest duration solved. The result is checked afterwards on finer grids (time steps
+and the robust band).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy.interpolate import BSpline
-from scipy.optimize import lsq_linear, minimize
+from scipy.optimize import nnls
 
 import rotrod_core.model.propagation as propagation
 from rotrod_core.command.profiles import SpinUpProfile, spin_up_knots
@@ -48,13 +51,10 @@ MAX_FREE = 40
 KNOT_SPACING = 0.35
 """Knot spacing, in periods of the lowest natural frequency, until MAX_FREE is reached:
 the shape must resolve the vibration it cancels."""
-"""Finest optimisation grid, reached by doubling when the final check disagrees."""
 BAND_SAMPLES = 5
 """Fewest natural-frequency samples across a robust band used by the optimiser."""
 BAND_CHECK = 41
 """Natural-frequency samples across the band in the final check."""
-WINDOWS = 40
-"""Deflection-limit constraints: the largest |r| in each of this many time windows."""
 SHAPE_BOUND = 0.3
 """Control points stay within the start..target range widened by this fraction."""
 RESIDUAL_MARGIN = 0.1
@@ -67,17 +67,19 @@ optimisation grid computes the end state to ~1e-9 of them."""
 MAX_PERIODS = 1000
 """The duration search gives up beyond this many periods of w0 (or 4x the shortest
 duration the acceleration bound allows, if longer)."""
-DURATION_TOLERANCE = 0.02
-"""Relative width of the final duration bracket."""
-GAUSS_NEWTON = True
-"""Start each shape optimisation with constrained Gauss-Newton steps (then SLSQP)."""
-GIVE_UP = 3.0
-"""After Gauss-Newton, a duration is judged infeasible without SLSQP when the largest
-residual is still above this multiple of the aim while the deflection stays clear of
-its limit (the residual, not the limit, stalled)."""
-STALL = 25
-"""An optimisation stops as infeasible when the best of its last STALL iterations
-is still above 1.5x the aim and less than 20 % below the best before them."""
+DURATION_STEP = 1e-3
+"""The durations tried are whole multiples of this (s): the answer is the shortest
+multiple whose minimax value is <= 1, so machines that decide alike print it alike."""
+MINIMAX_ITERATIONS = 200
+"""Most steps of one minimax solve."""
+CLEARLY_FEASIBLE = 0.99
+"""A minimax solve stops once M is this far below 1: the duration is feasible whatever
+the rest of the iteration would do. The plan's own solve runs to convergence."""
+MINIMAX_TOLERANCE = 1e-9
+"""A minimax solve stops when a step predicts less decrease than this (relative)."""
+DAMPING = 1e-3
+"""First Levenberg-Marquardt damping of a minimax solve (ratios scaled to 1, per unit of
+the free control points squared)."""
 
 
 @dataclass(frozen=True)
@@ -222,7 +224,8 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
     A1 = propagation.system_matrix(co, w1, wd1)
     A2 = propagation.system_matrix(co, w2, wd2)
     omega = propagation.magnus4(h, A1, A2)
-    half = expm_batch(0.5 * omega)
+    quarter = expm_batch(0.25 * omega)
+    half = quarter @ quarter
     phi = half @ half
     X = propagation.affine_chain(phi, np.array([s.start for s in samples]))
     if free is None:
@@ -235,35 +238,19 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
                   propagation.magnus4_derivative(h, A1, A2, 0.0, dw2),
                   propagation.magnus4_derivative(h, A1, A2, 0.0, da2),
                   propagation.magnus4_step_derivative(h, A1, A2) * (h / T)])
-    dx = propagation.frechet_simpson(half, phi, E, X[:, :-1], X[:, 1:])
+    dx = propagation.frechet_boole(quarter, E, X[:, :-1])
     z = np.zeros((grid.n, 1))
     dp = np.stack([np.c_[grid.w1[:, free], z], np.c_[grid.d1[:, free] / T, -wd1[:, None] / T],
                    np.c_[grid.w2[:, free], z], np.c_[grid.d2[:, free] / T, -wd2[:, None] / T],
                    np.c_[np.zeros((grid.n, len(free))), z + 1]])
-    D = np.einsum('pbni,pnk->bnik', dx, dp)
+    D = np.moveaxis(dx, 0, -1) @ np.moveaxis(dp, 0, 1)        # (B, N, 5, P) @ (N, P, k)
     return X, propagation.sensitivity_chain(phi, D)
 
 
-def _residuals(samples, X, S=None, parts=False):
-    """Residual amplitude of each sample at the end (and its gradient).
-
-    With ``parts``, also the whirl components (complex, all samples) and their
-    derivatives, whose moduli the amplitudes add up.
-    """
-    out, grad, vals, dvals = [], [], [], []
-    for b, s in enumerate(samples):
-        val = s.rows @ (X[b, -1, :4] - s.target)
-        mag = np.abs(val)
-        out.append(mag.sum())
-        if S is not None:
-            dval = s.rows @ S[b, -1, :4]
-            grad.append(((np.conj(val)[:, None] * dval).real
-                         / np.maximum(mag, 1e-300)[:, None]).sum(axis=0))
-            vals.append(val)
-            dvals.append(dval)
-    if parts:
-        return np.array(out), np.array(grad), np.concatenate(vals), np.concatenate(dvals)
-    return np.array(out), (np.array(grad) if S is not None else None)
+def _residuals(samples, X) -> np.ndarray:
+    """Residual amplitude (m) of each sample at the end of the states X: sum of moduli."""
+    return np.array([np.abs(s.rows @ (X[b, -1, :4] - s.target)).sum()
+                     for b, s in enumerate(samples)])
 
 
 class _Problem:
@@ -281,7 +268,10 @@ class _Problem:
         self.samples = [_sample(params, s, omega_start, omega_target) for s in self.scales]
         self.steps = steps
         self.grid = _Grid(n_free, steps)
-        self.windows = np.array_split(np.arange(self.grid.n + 1), WINDOWS)
+        # whirl components that are not identically zero (a round rod without damping
+        # whirls in circles: one of each pair's two components vanishes)
+        self.rows = [s.rows[np.linalg.norm(s.rows, axis=1) > 1e-9 * np.linalg.norm(s.rows)]
+                     for s in self.samples]
         lo, hi = sorted((omega_start, omega_target))
         cap = _speed_cap(params, max(self.scales[0], min(self.scales)))
         lo, hi = max(lo - SHAPE_BOUND * (hi - lo), 0.0), min(hi + SHAPE_BOUND * (hi - lo),
@@ -319,160 +309,67 @@ class _Problem:
         full = np.linalg.lstsq(Bw[:, self.free], w - fixed, rcond=None)[0]
         return np.clip((full - self.ws) / self.dw, *self.bounds[0])
 
-    def evaluate(self, T, y):
-        X, S = _propagate(self.samples, self.grid, T, self.control_points(y), self.free)
-        S = S[..., :-1] * self.dw
-        res, dres, val, dval = _residuals(self.samples, X, S, parts=True)
-        r2 = X[0, :, 0] ** 2 + X[0, :, 1] ** 2
-        dr2 = 2 * (X[0, :, 0, None] * S[0, :, 0] + X[0, :, 1, None] * S[0, :, 1])
-        return res, dres, r2, dr2, val, dval
+    def limits(self, T: float) -> _Limits:
+        """The constraint ratios of this problem at duration T (s)."""
+        return _Limits(self, T)
 
-    def gauss_newton(self, T, y, ev, feasible, aim, d2, acc, iterations=30):
-        """Drive the whirl components to zero by constrained Gauss-Newton steps.
+    def minimax(self, T, y0, clear=CLEARLY_FEASIBLE, iterations=MINIMAX_ITERATIONS):
+        """The shape at duration T (s) that minimises the largest constraint ratio: (y, M).
 
-        Each step minimises sum_b weight_b |components_b + J_b d|^2 (scaled by the
-        aim) over the step d, with the deflection limit linearised in each window and
-        within a trust region; a step is kept when it lowers that sum plus a penalty
-        on the deflection excess. When the steps stall, the samples of the band are
-        reweighted in proportion to their residuals (Lawson's iteration towards the
-        smallest largest residual).
+        M = max over the ratios of :class:`_Limits` (every band sample's squared
+        residual bound / aim^2, every grid node's |r|^2 / d2) among the shapes within
+        the acceleration bound and the box: the duration is feasible iff M <= 1.
+        Solved to convergence by sequential quadratic programming in epigraph form
+        (:func:`_minimax_step`) from ``y0`` (first moved into the linear bounds): M is
+        the value the iteration converges to, not the first iterate that happens to
+        pass, so the decision M <= 1 moves with the machine's rounding only where M is
+        within the solver's tolerance of 1.
         """
-        sizes = [len(s.rows) for s in self.samples]
-        owner = np.repeat(np.arange(len(sizes)), sizes)
-        weights = np.ones(len(sizes))
-
-        def merit(e):
-            _, _, r2, _, val, _ = e
-            peaks = np.array([r2[w].max() for w in self.windows])
-            return (np.sum(weights[owner] * np.abs(val) ** 2) / aim**2
-                    + 1e3 * np.sum(np.maximum(peaks / d2 - 1.0, 0.0)))
-
-        lo, hi = self.bounds[0]
-        radius = 0.2
-        e = ev(y)
-        m = merit(e)
-        history = [e[0].max()]
+        lim = self.limits(T)
+        y = self._within_bounds(lim, np.asarray(y0, dtype=float))
+        g, G, C = lim.model(y)
+        weights = (g >= g.max()).astype(float)
+        damping = DAMPING * _hessian(weights, C).trace() / self.n_free
         for _ in range(iterations):
-            if feasible(y):
-                return y
-            res, _, r2, dr2, val, dval = e
-            sw = np.sqrt(weights[owner])
-            r = np.r_[sw * val.real, sw * val.imag] / aim
-            J = np.r_[sw[:, None] * dval.real, sw[:, None] * dval.imag] / aim
-            at = [w[np.argmax(r2[w])] for w in self.windows]
-            C, c = dr2[at] / d2, 1.0 - r2[at] / d2          # C d <= c, linearised
-            if acc is not None:
-                C, c = np.r_[C, acc[0]], np.r_[c, acc[1] - acc[0] @ y]
-            bounds = (np.maximum(lo - y, -radius), np.minimum(hi - y, radius))
-            d = _bounded_least_squares(J, -r, C, c, bounds)
-            stalled = not np.all(np.isfinite(d)) or np.max(np.abs(d)) < 1e-8
-            if not stalled:
-                e_new = ev(y + d)
-                m_new = merit(e_new)
-                if m_new < m:
-                    y, e, m = y + d, e_new, m_new
-                    radius = min(2 * radius, 0.5)
-                else:
-                    radius *= 0.3
-                    stalled = radius < 1e-4
-            if stalled:
-                if len(weights) == 1:
-                    break
-                weights = weights * e[0] / np.max(e[0])     # Lawson: weight the worst
-                weights /= weights.max()
-                m = merit(e)
-                radius = 0.2
-            history.append(e[0].max())
-            # far from the aim and no longer improving, the limit not in the way
-            if len(history) > 6 and history[-1] > GIVE_UP * aim \
-                    and history[-1] > 0.7 * history[-7] and e[2].max() < 0.98 * d2:
+            m = float(g.max())
+            if m <= clear:
                 break
-        return y
+            step = _minimax_step(g, G, _hessian(weights, C), damping, *self._bounds(lim, y))
+            if step is None:
+                break
+            d, multipliers, predicted = step
+            if predicted <= MINIMAX_TOLERANCE * max(m, 1.0):
+                break
+            trial = np.clip(y + d, *self.bounds[0])
+            gain = (m - float(lim.values(trial).max())) / predicted
+            if gain > 0.1:
+                y = trial
+                g, G, C = lim.model(y)
+                weights = multipliers
+                if gain > 0.75:
+                    damping /= 4.0
+            else:
+                damping *= 4.0
+        return y, float(g.max())
 
-    def solve(self, T, y0, maxiter=60):
-        """Look for a feasible shape at duration T from y0: (y, feasible).
+    def _bounds(self, lim: _Limits, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Linear constraints L d <= l on a step d from y: the box and |w'| <= max_acc."""
+        lo, hi = self.bounds[0]
+        eye = np.eye(self.n_free)
+        L, rhs = [eye, -eye], [hi - y, y - lo]
+        if lim.acc_matrix is not None:
+            L.append(lim.acc_matrix)
+            rhs.append(lim.acc_bound - lim.acc_matrix @ y)
+        return np.concatenate(L), np.concatenate(rhs)
 
-        Gauss-Newton first; if that stalls close enough to the aim, SLSQP minimises
-        the largest residual (epigraph form) and stops at the first feasible iterate.
-        """
-        cache: dict[bytes, tuple[np.ndarray, ...]] = {}
-
-        def ev(z):
-            key = z[:-1].tobytes()      # the evaluation does not depend on the slack
-            if key not in cache:
-                if len(cache) > 4:
-                    cache.pop(next(iter(cache)))
-                cache[key] = self.evaluate(T, z[:-1])
-            return cache[key]
-
-        aim = self.residual * (1 - RESIDUAL_MARGIN)
-        d2 = (self.limit * (1 - LIMIT_MARGIN)) ** 2
-
-        def cons(z):
-            res, _, r2, _, _, _ = ev(z)
-            peaks = np.array([r2[w].max() for w in self.windows])
-            return np.r_[z[-1] - res / aim, 1.0 - peaks / d2]
-
-        def jac(z):
-            res, dres, r2, dr2, _, _ = ev(z)
-            at = [w[np.argmax(r2[w])] for w in self.windows]
-            return np.r_[np.c_[-dres / aim, np.ones(len(res))],
-                         np.c_[-dr2[at] / d2, np.zeros(len(at))]]
-
-        constraints: list[dict[str, Any]] = [{'type': 'ineq', 'fun': cons, 'jac': jac}]
-        if self.max_acc is not None:
-            A = self.diff[:, self.free] * self.dw / T
-            a0 = self.diff @ self.control_points(np.zeros(self.n_free)) / T
-            Az = np.c_[np.r_[A, -A], np.zeros(2 * len(A))]
-            b = self.max_acc - np.r_[a0, -a0]
-            constraints.append({'type': 'ineq', 'fun': lambda z: b - Az @ z,
-                                'jac': lambda z: -Az})
-        def feasible(y):
-            res, _, r2, _, _, _ = ev(np.r_[y, 0.0])
-            ok = res.max() <= aim and r2.max() <= d2
-            if ok and self.max_acc is not None:
-                ok = bool(np.all(constraints[1]['fun'](np.r_[y, 0.0]) >= -1e-12))
-            return bool(ok)
-
-        found = []
-
-        history = []
-
-        def stop_when_feasible(intermediate_result):
-            y = intermediate_result.x[:-1]
-            if feasible(y):
-                found.append(y)
-                raise StopIteration
-            # give up when the largest residual has stalled well above the aim
-            history.append(ev(np.r_[y, 0.0])[0].max() / aim)
-            if len(history) > 2 * STALL and min(history[-STALL:]) > max(
-                    1.5, 0.8 * min(history[:-STALL])):
-                raise StopIteration
-
-        y0 = np.clip(y0, *self.bounds[0])
-        if feasible(y0):
-            return y0, True
-        if GAUSS_NEWTON:
-            acc = None
-            if self.max_acc is not None:
-                acc = (Az[:, :-1], b)
-            y0 = self.gauss_newton(T, y0, lambda y: ev(np.r_[y, 0.0]), feasible, aim, d2, acc)
-            if feasible(y0):
-                return y0, True
-            res, _, r2, _, _, _ = ev(np.r_[y0, 0.0])
-            if res.max() > GIVE_UP * aim and r2.max() < 0.98 * d2:
-                return y0, False        # the residual stalled, the limit is not in the way
-        z0 = np.r_[y0, ev(np.r_[y0, 0.0])[0].max() / aim * 1.01]
-        sol = minimize(lambda z: z[-1], z0, jac=lambda z: np.r_[np.zeros(self.n_free), 1.0],
-                       method='SLSQP', constraints=constraints,
-                       bounds=self.bounds + [(0.0, None)], callback=stop_when_feasible,
-                       options={'maxiter': maxiter, 'ftol': 1e-10})
-        if found:
-            return found[0], True
-        y = sol.x[:-1]
-        if np.all(np.isfinite(y)):
-            return y, feasible(y)
-        return y0, False
+    def _within_bounds(self, lim: _Limits, y: np.ndarray) -> np.ndarray:
+        """The point nearest y (Euclidean) within the box and the acceleration bound."""
+        y = np.clip(y, *self.bounds[0])
+        L, rhs = self._bounds(lim, y)
+        if np.all(rhs >= 0):
+            return y
+        out = _quadratic_program(np.eye(self.n_free), np.zeros(self.n_free), L, rhs)
+        return y if out is None else np.clip(y + out[0], *self.bounds[0])
 
     def check(self, T, y):
         """Check on a 4x finer time grid: (peak, nominal residual, band max, its scale).
@@ -484,39 +381,134 @@ class _Problem:
         c = self.control_points(y)
         X, _ = _propagate(self.samples[:1], fine, T, c)
         peak = _peak(X[0, :, 0] ** 2 + X[0, :, 1] ** 2)
-        nominal = float(_residuals(self.samples[:1], X)[0][0])
+        nominal = float(_residuals(self.samples[:1], X)[0])
         band, worst = nominal, 1.0
         eps = max(abs(s - 1.0) for s in self.scales)
         if eps > 0:
             scales = np.linspace(1 - eps, 1 + eps, max(BAND_CHECK, 4 * len(self.scales)))
             samples = [_sample(self.params, s, self.ws, self.wf) for s in scales]
             Xb, _ = _propagate(samples, fine, T, c)
-            res = _residuals(samples, Xb)[0]
+            res = _residuals(samples, Xb)
             band, worst = float(res.max()), float(scales[np.argmax(res)])
         return peak, nominal, band, worst
 
 
-def _bounded_least_squares(J, rhs, C, c, bounds, rounds=6):
-    """Least squares |J d - rhs| within bounds and C d <= c (linear), by an active set.
+class _Limits:
+    """The constraint ratios of one shape problem at one duration, and their local model.
 
-    Rows of C that a solution breaks join the least-squares problem as heavily
-    weighted equations C_i d = c_i (they would be active), until none is broken.
+    values(y) = (m_b sum_j |a_bj|^2 / aim^2 for every band sample b, |r|^2 / d2 at every
+    grid node after the start), a_bj the whirl components of sample b (m_b of them): a
+    shape y meets the limits on the optimisation grid when all are <= 1 (aim and d2
+    carry the margins; by Cauchy-Schwarz the residual, sum_j |a_bj|, is then <= aim).
+    Each ratio is a squared norm of components smooth in y: model(y) gives their
+    gradients and Gauss-Newton curvature factors (C_i with curvature C_i^T C_i), from
+    the kernel's exact sensitivities.
     """
-    weight = 1e4 * max(float(np.linalg.norm(J)), 1.0)
-    active = np.flatnonzero(c < 0)
-    lower, upper = bounds
-    lower = np.minimum(lower, 0.0)
-    upper = np.maximum(upper, 0.0)
-    for _ in range(rounds):
-        scale = weight / np.maximum(np.linalg.norm(C[active], axis=1), 1e-300)
-        A = np.r_[J, scale[:, None] * C[active]]
-        b = np.r_[rhs, scale * c[active]]
-        d = lsq_linear(A, b, bounds=(lower, upper), method='bvls').x
-        broken = np.setdiff1d(np.flatnonzero(C @ d > c + 1e-9 * (1 + np.abs(c))), active)
-        if broken.size == 0:
-            break
-        active = np.union1d(active, broken)
-    return d
+
+    def __init__(self, problem: _Problem, T: float):
+        self.problem, self.T = problem, T
+        self.aim = problem.residual * (1 - RESIDUAL_MARGIN)
+        self.d2 = (problem.limit * (1 - LIMIT_MARGIN)) ** 2
+        self.acc_matrix = self.acc_bound = None
+        if problem.max_acc is not None:
+            # w' = (diff @ c) / T, linear in y: |w'| <= max_acc as A y <= b
+            A = problem.diff[:, problem.free] * problem.dw / T
+            a0 = problem.diff @ problem.control_points(np.zeros(problem.n_free)) / T
+            self.acc_matrix, self.acc_bound = np.r_[A, -A], problem.max_acc - np.r_[a0, -a0]
+
+    def values(self, y) -> np.ndarray:
+        p = self.problem
+        X, _ = _propagate(p.samples, p.grid, self.T, p.control_points(y))
+        res = [len(rows) * np.sum(np.abs(rows @ (X[b, -1, :4] - s.target)) ** 2)
+               for b, (s, rows) in enumerate(zip(p.samples, p.rows))]
+        r2 = X[0, 1:, 0] ** 2 + X[0, 1:, 1] ** 2
+        return np.r_[np.array(res) / self.aim**2, r2 / self.d2]
+
+    def model(self, y) -> tuple[np.ndarray, np.ndarray, list]:
+        """(values, gradients (k, n), Gauss-Newton curvature factors) of every ratio at y.
+
+        Each ratio is a squared norm m |a(y)|^2 of components a smooth in y (scaled by
+        the limit): its gradient is 2 m Re(a^H J) and its Gauss-Newton curvature
+        2 m J^T J, given as the factor sqrt(2 m) J (real rows), J = da/dy from the
+        kernel's sensitivities.
+        """
+        p = self.problem
+        X, S = _propagate(p.samples, p.grid, self.T, p.control_points(y), p.free)
+        S = S[..., :-1] * p.dw
+        values, gradients, factors = [], [], []
+        for b, (s, rows) in enumerate(zip(p.samples, p.rows)):
+            m = len(rows)
+            a = rows @ (X[b, -1, :4] - s.target) / self.aim
+            J = rows @ S[b, -1, :4] / self.aim
+            values.append(m * np.sum(np.abs(a) ** 2))
+            gradients.append(2 * m * (np.conj(a)[:, None] * J).real.sum(axis=0))
+            factors.append(math.sqrt(2 * m) * np.r_[J.real, J.imag])
+        u, v, Ju, Jv = X[0, 1:, 0], X[0, 1:, 1], S[0, 1:, 0], S[0, 1:, 1]
+        values = np.r_[values, (u * u + v * v) / self.d2]
+        gradients = np.r_[np.array(gradients), 2 * (u[:, None] * Ju + v[:, None] * Jv) / self.d2]
+        factors.append(math.sqrt(2 / self.d2) * np.stack([Ju, Jv], axis=1))    # (N, 2, n)
+        return values, gradients, factors
+
+
+def _hessian(weights: np.ndarray, factors: list) -> np.ndarray:
+    """sum_i weights_i C_i^T C_i over the ratios (the last factor: all grid nodes)."""
+    *residuals, nodes = factors
+    B = len(residuals)
+    H = sum((w * C.T @ C for w, C in zip(weights[:B], residuals) if w > 0),
+            np.zeros((nodes.shape[-1],) * 2))
+    w = weights[B:]
+    if np.any(w > 0):
+        H = H + np.einsum('k,kan,kam->nm', w, nodes, nodes)
+    return H
+
+
+def _minimax_step(g, G, H, damping, L, rhs):
+    """One SQP step of min_y max_i g_i(y): (d, multipliers, predicted decrease) or None.
+
+    The quadratic program min t + 1/2 d^T (H + damping I) d over (d, t) subject to
+    g_i + G_i d <= t for every ratio and L d <= rhs, scaled by max g; H is the
+    multiplier-weighted Gauss-Newton curvature of the ratios (the Lagrangian's), the
+    damping a Levenberg-Marquardt trust region. The predicted decrease is
+    max g - (max_i (g_i + G_i d) + 1/2 d^T H d).
+    """
+    m = float(g.max())
+    n = G.shape[1]
+    Q = np.zeros((n + 1, n + 1))
+    Q[:n, :n] = (H + damping * np.eye(n)) / m
+    Q[n, n] = 1e-2                              # strictly convex in t as well
+    A = np.r_[np.c_[G / m, -np.ones(len(g))], np.c_[L, np.zeros(len(L))]]
+    b = np.r_[-g / m, rhs]
+    out = _quadratic_program(Q, np.r_[np.zeros(n), 1.0], A, b)
+    if out is None:
+        return None
+    x, multipliers = out
+    d = x[:n]
+    predicted = m - (float((g + G @ d).max()) + 0.5 * d @ H @ d)
+    weights = np.maximum(multipliers[:len(g)], 0.0)
+    return d, weights / max(weights.sum(), 1e-300), predicted
+
+
+def _quadratic_program(Q, q, A, b):
+    """The x minimising 1/2 x^T Q x + q^T x subject to A x <= b (Q positive definite).
+
+    Returns (x, multipliers of the rows of A), or None if the constraints are
+    incompatible. Least-distance form solved by non-negative least squares (Lawson and
+    Hanson, Solving Least Squares Problems, ch. 23; what SLSQP does inside): with
+    Q = L L^T and u = L^T x + L^-1 q, minimise |u| subject to G u >= h.
+    """
+    L = np.linalg.cholesky(Q)
+    Lq = np.linalg.solve(L, q)
+    AL = np.linalg.solve(L, A.T).T             # A L^-T
+    G, h = -AL, -(b + AL @ Lq)
+    E = np.r_[G.T, h[None, :]]
+    f = np.zeros(len(q) + 1)
+    f[-1] = 1.0
+    lam = nnls(E, f, maxiter=50 * E.shape[1])[0]
+    r = E @ lam - f
+    if abs(r[-1]) < 1e-12:
+        return None
+    x = np.linalg.solve(L.T, -r[:-1] / r[-1] - Lq)
+    return x, lam / (1.0 - h @ lam)
 
 
 def _peak(r2: np.ndarray) -> float:
@@ -680,73 +672,107 @@ class _Family:
         band = np.linspace(1 - self.eps, 1 + self.eps, n)
         return [1.0] + [float(s) for s in band if abs(s - 1.0) > 1e-12] + self.extra
 
-    def solve(self, T: float, c):
-        """Feasible control points at duration T from the shape ``c``: (c, ok)."""
+    def minimax(self, T: float, c, clear: float = CLEARLY_FEASIBLE):
+        """The minimax shape at duration T (s) from the shape ``c`` (None: Eq. 26's): (c, M).
+
+        The solve stops once M <= ``clear`` (0: run to convergence).
+        """
         problem = self.problem(T)
         y0 = problem.initial_shape() if c is None else problem.fit(c)
-        y, ok = problem.solve(T, y0)
-        return problem.control_points(y), ok
+        y, m = problem.minimax(T, y0, clear)
+        return problem.control_points(y), m
 
     def check(self, T: float, c):
         problem = self.problem(T)
         return problem.check(T, problem.fit(c))
 
 
-def _search(family: _Family) -> SpinUpProfile:
-    """Bracket and bisect the duration on the feasibility of the shape optimisation.
+class _Durations:
+    """Minimax solves at durations k x DURATION_STEP, each warm-started from the nearest.
 
-    The result is checked on finer grids; when the check fails, the optimisation
-    grid is refined, or the band's worst frequency joins the optimised samples, or
-    the duration grows.
+    ``solve(k)`` returns M(k); the shapes are kept, and a solve starts from the shape of
+    the nearest duration already solved (continuation), or from Eq. 26's for the first.
+    ``forget()`` drops the values (not the shapes) when the family's grid or band
+    samples change.
+    """
+
+    def __init__(self, family: _Family):
+        self.family = family
+        self.shapes: dict[int, np.ndarray] = {}
+        self.values: dict[int, float] = {}
+
+    def solve(self, k: int) -> float:
+        if k not in self.values:
+            near = min(self.shapes, key=lambda j: (abs(j - k), j), default=None)
+            c, m = self.family.minimax(k * DURATION_STEP,
+                                       None if near is None else self.shapes[near])
+            self.shapes[k], self.values[k] = c, m
+        return self.values[k]
+
+    def forget(self):
+        self.values.clear()
+
+
+def _search(family: _Family) -> SpinUpProfile:
+    """The shortest duration k x DURATION_STEP whose minimax value M is <= 1, and its shape.
+
+    M(T) (:meth:`_Problem.minimax`) is bracketed by factors of 1.6 from a first guess,
+    then the bracket is bisected down to one DURATION_STEP, each solve warm-started
+    from the shape of the nearest duration solved (continuation). The plan is the
+    shape at the shortest feasible duration, solved to convergence.
+    The result is checked on
+    finer grids; when the check fails, the optimisation grid is refined, or the band's
+    worst frequency joins the optimised samples, and the search goes on from the
+    bracket.
     """
     lower = abs(family.wf - family.ws) / family.max_acc if family.max_acc else 0.0
     T_max = max(MAX_PERIODS * family.period, 4.0 * lower)
     eps = family.eps
     # a first guess: two periods, or what resolving the band takes (~ 1 / (eps w0))
     first = family.period * max(2.0, 0.7 / eps if eps else 0.0)
-    good = _feasible_from(family, max(first, 1.6 * lower), None, T_max)
-    bad = lower
+    runs = _Durations(family)
+    bad = math.floor(lower / DURATION_STEP)     # w' = 0 at both ends: lower itself fails
+    good = _feasible_from(runs, max(math.ceil(max(first, 1.6 * lower) / DURATION_STEP),
+                                    bad + 1), T_max)
+    bad = max([bad] + [k for k, m in runs.values.items() if m > 1.0 and k < good])
     for _ in range(8):
-        while good[0] - bad > DURATION_TOLERANCE * good[0]:
-            T = max(0.5 * (good[0] + bad), 0.6 * good[0])
-            c, ok = family.solve(T, good[1])
-            if ok:
-                good = (T, c)
+        while good - bad > 1:
+            mid = (good + bad) // 2
+            if runs.solve(mid) <= 1.0:
+                good = mid
             else:
-                bad = T
-        peak, nominal, band, worst = family.check(*good)
+                bad = mid
+        T = good * DURATION_STEP
+        c, _ = family.minimax(T, runs.shapes[good], clear=0.0)     # converged: the plan
+        peak, nominal, band, worst = family.check(T, c)
         if peak <= family.limit and nominal <= family.residual and band <= family.residual:
-            T, c = good
             return SpinUpProfile(T, c, peak_deflection=peak, residual_amplitude=nominal,
                                  band_residual=band, robust=eps)
         coarse = peak > family.limit or nominal > family.residual
         if coarse and family.steps < MAX_STEPS_PER_KNOT:
             family.steps *= 2
-        elif not coarse and worst not in family.scales(good[0]):
+        elif not coarse and worst not in family.scales(T):
             family.extra.append(worst)      # a cutting plane in the band
         else:       # the check failed at good with the finest settings: search above it
-            bad = good[0]
-            good = _feasible_from(family, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
+            bad = good
+            good = _feasible_from(runs, math.ceil(good * 1.02) + 1, T_max)
             continue
-        c, ok = family.solve(*good)
-        if ok:
-            good = (good[0], c)
-        else:
-            bad = good[0]
-            good = _feasible_from(family, good[0] * (1 + DURATION_TOLERANCE), good[1], T_max)
+        runs.forget()
+        if runs.solve(good) > 1.0:
+            bad = good
+            good = _feasible_from(runs, math.ceil(good * 1.02) + 1, T_max)
     raise ValueError(f'no plan from {family.ws:g} to {family.wf:g} rad/s passed the final '
-                     f'check on a finer grid (last tried {good[0]:g} s): the constraints are '
-                     'too close to what the linear model can resolve')
+                     f'check on a finer grid (last tried {good * DURATION_STEP:g} s): the '
+                     'constraints are too close to what the linear model can resolve')
 
 
-def _feasible_from(family: _Family, T: float, c, T_max: float):
-    """The first feasible (T, control points) going up from T by factors of 1.6."""
-    while T <= T_max:
-        c_new, ok = family.solve(T, c)
-        if ok:
-            return T, c_new
-        T *= 1.6
-    raise ValueError(_infeasible_message(family, T_max))
+def _feasible_from(runs: _Durations, k: int, T_max: float) -> int:
+    """The first k going up from k by factors of 1.6 whose minimax value is <= 1."""
+    while k * DURATION_STEP <= T_max:
+        if runs.solve(k) <= 1.0:
+            return k
+        k = math.ceil(1.6 * k)
+    raise ValueError(_infeasible_message(runs.family, T_max))
 
 
 def _infeasible_message(problem: _Family, T_max: float) -> str:

@@ -219,7 +219,8 @@ def describe(profile: Profile, options: dict) -> list:
             f'(deflection_limit {o["deflection_limit"] * 1e3:g} mm), residual whirl '
             f'{residual_bound(residual, o["residual"])}{band}, largest |w\'| {peak_acc:.3g} '
             f'rad/s^2 ({honoured})')
-    need = math.ceil(peak_acc * 1e3) / 1e3
+    # rounded up to 1e-3, but a plan that rides its bound (to rounding) needs the bound
+    need = math.ceil(peak_acc * 1e3 * (1 - 1e-9)) / 1e3
     if bound:
         must = (f'the simulator must allow |w\'| up to {need:g} rad/s^2: give it the same '
                 f'max_angular_acceleration {bound:g} rad/s^2 (one params file for both '

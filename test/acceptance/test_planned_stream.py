@@ -71,7 +71,8 @@ def stream(ros_processes, ros_node, ns, files, params=None):
     paths = [a for name in files for a in ('--params-file', str(CONFIG / name))]
     pub = ros_processes.start_console_script('profile_publisher', ros_args[0], *paths,
                                              *ros_args[1:], name=ns.strip('/') + '_pub')
-    ros_node.spin_until(lambda: 'end: published' in pub.output, 120, 'the end of the stream')
+    # the publisher plans at start: config/planned.yaml's robust plan takes ~0.5-2 min here
+    ros_node.spin_until(lambda: 'end: published' in pub.output, 400, 'the end of the stream')
     t_end = stamp(joint[-1])
     ros_node.spin_until(lambda: stamp(joint[-1]) >= t_end + DELAY + SETTLE + WINDOW, 60,
                         'the hold after the stream')

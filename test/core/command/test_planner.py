@@ -28,7 +28,6 @@ from rotrod_core import (
     whirl_residual,
 )
 from rotrod_core.command import planner
-from rotrod_core.command.planner import residual_bound
 
 TABLE1 = RodParams()
 RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)
@@ -289,23 +288,28 @@ def test_the_whirl_of_a_measured_motion_is_the_fitted_free_whirl():
 _PLAN_SUMMARY = """
 import json, sys
 from rotrod_core import RodParams, plan_spin_up
-cases = {'Table 1': RodParams(), 'steel rod': RodParams(rod_density=7850.0)}
+from rotrod_core.command.registry import describe
+cases = {'Table 1': (RodParams(), {}),
+         'robust 0.1': (RodParams(), {'robust': 0.1, 'residual': 1e-6})}
 out = {}
-for name, params in cases.items():
-    plan = plan_spin_up(params, 2.0)
+for name, (params, kwargs) in cases.items():
+    plan = plan_spin_up(params, 2.0, **kwargs)
+    options = {'max_angular_acceleration': 0.0, 'residual': kwargs.get('residual', 2.5e-7)}
     out[name] = [plan.duration, plan.peak_deflection, plan.residual_amplitude,
-                 plan.max_angular_acceleration]
+                 plan.band_residual, describe(plan, options)]
 json.dump(out, sys.stdout)
 """
 
 
 @pytest.mark.slow
 @pytest.mark.skipif(platform.machine() != 'x86_64', reason='OpenBLAS kernels of x86-64')
-def test_every_blas_kernel_plans_within_the_limits_and_the_documented_spread():
+def test_every_blas_kernel_plans_the_same_durations_and_summaries():
     """The same requests in fresh processes with OPENBLAS_CORETYPE = Haswell and
     Sandybridge (FMA and no FMA: different rounding in every matrix product) and with 1
-    and 2 OpenBLAS threads: every plan meets the limits, and the durations stay within
-    the spread docs/planner.md states for the local search (10 %)."""
+    and 2 OpenBLAS threads: every plan meets its limits, the durations are equal (to
+    1e-3 s, the step of the search) and the summary printed of each plan (duration,
+    peak, residual bounds, largest |w'|: registry.describe) is the same text. (A steel
+    rod and config/planned.yaml's request: bench/bench_planner_kernels.py.)"""
     settings = [{'OPENBLAS_NUM_THREADS': '1'}, {'OPENBLAS_NUM_THREADS': '2'},
                 {'OPENBLAS_CORETYPE': 'Haswell', 'OPENBLAS_NUM_THREADS': '1'},
                 {'OPENBLAS_CORETYPE': 'Sandybridge', 'OPENBLAS_NUM_THREADS': '1'}]
@@ -316,12 +320,13 @@ def test_every_blas_kernel_plans_within_the_limits_and_the_documented_spread():
                                      env={**env, **extra}, stdout=subprocess.PIPE, text=True))
     results = []
     for extra, run in zip(settings, runs):
-        out, _ = run.communicate(timeout=600)
+        out, _ = run.communicate(timeout=900)
         assert run.returncode == 0, extra
         results.append(json.loads(out))
     for name in results[0]:
         values = [r[name] for r in results]
         durations = [v[0] for v in values]
-        assert max(durations) <= 1.1 * min(durations), (name, durations)
-        assert all(v[1] <= 3e-3 and v[2] <= 2.5e-7 for v in values), (name, values)
-        assert {residual_bound(v[2], 2.5e-7) for v in values} == {'<= 0.25 um'}
+        assert max(durations) - min(durations) <= 1e-9, (name, durations)
+        bound = 1e-6 if name == 'robust 0.1' else 2.5e-7
+        assert all(v[1] <= 3e-3 and v[2] <= bound and v[3] <= bound for v in values), values
+        assert all(v[4] == values[0][4] for v in values), (name, [v[4] for v in values])

@@ -157,6 +157,33 @@ def test_magnus4_derivative_is_the_difference_quotient():
     assert np.allclose(propagation.magnus4_step_derivative(h, A1, A2), fdh, atol=1e-8)
 
 
+@pytest.mark.parametrize('size', [0.3, 1.0])
+def test_frechet_boole_is_the_exact_derivative_of_the_exponential(size):
+    """d(exp(Omega) x) along E is the top-right block of exp([[Omega, E], [0, Omega]])
+    applied to x (Van Loan); Boole's rule meets it to ~8 (|Omega|/4)^6 / 945 relative,
+    for a step as long as the planner's (|Omega| up to ~1) and a shorter one: the whirl
+    the planner drives to zero is ~1e-4 of the state, so its gradient needs it."""
+    co = Coefficients.from_params(RodParams(damping_ratio=0.02))
+    A1 = propagation.system_matrix(co, 1.0, 0.7)
+    A2 = propagation.system_matrix(co, 1.4, 0.7)
+    dA, _ = propagation.system_matrix_derivatives(co, 1.2, 0.7)
+    h = size / np.linalg.norm(A1, 2)
+    omega = propagation.magnus4(h, A1, A2)
+    E = propagation.magnus4_derivative(h, A1, A2, dA, dA)
+    x = np.array([1e-3, -2e-3, 0.01, 0.02, 1.0])
+    block = np.zeros((10, 10))
+    block[:5, :5] = block[5:, 5:] = omega
+    block[:5, 5:] = E
+    exact = expm(block)[:5, 5:] @ x
+    boole = propagation.frechet_boole(expm(0.25 * omega), E[None], x)[0]
+    bound = 8 * (np.linalg.norm(omega, 2) / 4) ** 6 / 945
+    assert np.linalg.norm(boole - exact) <= 10 * bound * np.linalg.norm(exact) + 1e-15
+    # and far closer than Simpson's rule on three points (the planner's rule before)
+    half = expm(0.5 * omega)
+    simpson = (half @ half @ E @ x + 4 * half @ E @ half @ x + E @ half @ half @ x) / 6
+    assert np.linalg.norm(boole - exact) <= 1e-2 * np.linalg.norm(simpson - exact)
+
+
 def test_affine_chain_is_the_sequential_product():
     rng = np.random.default_rng(3)
     phi = np.eye(4) + 0.05 * rng.standard_normal((2, 37, 4, 4))

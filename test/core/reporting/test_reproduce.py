@@ -404,10 +404,11 @@ def same_text_and_numbers(a, b):
     return True
 
 
-PLANNER_SPREAD = {1: 0.1, 2: 0.5, 3: 0.01, 5: 1.0}
-"""Columns of the spin-up table that a planned row fills from the planner's local search
-(duration, |w'|, peak, band residual), with the relative spread over which that search
-ends on other CPUs (docs/planner.md#limits-and-doubts); the residual column is the bound."""
+PLANNER_SPREAD: dict[int, float] = {}
+"""Columns of the spin-up table that a planned row may fill differently on other CPUs,
+with the relative spread allowed. None since the planner decides durations by a
+converged minimax value: its rows are equal to the printed digit under the OpenBLAS
+kernels tried (docs/planner.md#limits-and-doubts)."""
 
 
 PLANNER_FIGURES = {'spin_ups.png'}
