@@ -87,6 +87,7 @@ def hold_rows(rows, w, arrived):
     return rows[keep]
 
 
+@pytest.mark.long      # a robust plan takes tens of seconds: .ci/run runs it
 def test_a_planned_goal_arrives_with_the_predicted_residual_below_eq26s(
         ros_processes, ros_node, request):
     ns = namespace(request)

@@ -11,6 +11,7 @@ import os
 import re
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,7 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
     for ns in fleet.namespaces(RODS):                # each rod's sensor in its own frame
         sensed = ros_node.wait_for_messages(f'{ns}/tip/deflection', Vector3Stamped, 3)
         assert {m.header.frame_id for m in sensed} == {f'{ns[1:]}/rotor'}
+    stop = time.time()              # the stamps are wall-clock times (real time, no /clock)
     os.kill(proc.pid, signal.SIGINT)            # Ctrl-C: the fleet stops every node
     assert proc.wait(timeout=30) == 0
     for ns in fleet.namespaces(RODS):
@@ -66,7 +68,9 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
         t, w, u = rows.T
         steps = np.diff(t) / 0.01
         assert np.max(np.abs(steps - np.round(steps))) < 1e-3 and np.min(steps) > 0.5
-        moving = w > 0.3
+        # while streamed: on Ctrl-C the profile publishers may stop before the
+        # simulators, and then w leaves Eq. 26 (the shaper's end of a stream)
+        moving = (w > 0.3) & (t < stop)
         assert moving.sum() > 100
         # Eq. 26 is slow against w0: the tip sits at u_s = m w^2 r0 / (k - m w^2)
         # (rotating damping leaves the static deflection as it is)

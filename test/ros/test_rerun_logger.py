@@ -42,6 +42,11 @@ def test_a_halt_and_its_reset_are_events_in_the_recording(ros_processes, ros_nod
                           max_omega=1.0)
     torque = ros_node.node.create_publisher(Float64, f'{ns}/cmd/torque', 10)
     ros_node.spin_until(lambda: torque.get_subscription_count() > 0, 10, 'cmd/torque sub')
+    # the halt's status is sent once, on the change: the logger must be receiving first
+    # (on a loaded machine its subscriptions matched seconds after the simulator began)
+    logger.wait_for_output('receiving: first joint state', timeout=30)
+    ros_node.spin_until(lambda: ros_node.node.count_subscribers('/diagnostics') > 0, 10,
+                        "the logger's /diagnostics subscription")
     torque.publish(Float64(data=0.5))                 # 8 rad/s^2: past 1 rad/s in 0.13 s
     sim.wait_for_output('simulation halted', timeout=30)
     time.sleep(1.5)                                   # a diagnostics period
