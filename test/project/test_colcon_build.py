@@ -314,32 +314,30 @@ def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
     order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', output)]
     assert sorted(order[:2]) == ['rotrod_interfaces', 'simulation_interfaces']
     assert order[2:] == [PACKAGE]                                   # rotrod depends on both
-    prefix = ws / 'install' / 'rotrod_interfaces'
-    site = next(prefix.glob('lib/python3*/site-packages'))
-    check = ('import rotrod_interfaces.msg as m, rotrod_interfaces.action as a\n'
-             'from rclpy.serialization import serialize_message as s\n'
-             'print(m.__file__); s(m.WhirlEstimate(f1=1.5)); print(a.SpinUp.Goal.PLANNED)')
-    run_env = dict(os.environ, PYTHONPATH=str(site),
-                   LD_LIBRARY_PATH=f'{prefix / "lib"}{os.pathsep}'
-                                   f'{os.environ.get("LD_LIBRARY_PATH", "")}')
-    run_env.pop('_ROS_WHEELS_BOOTSTRAP_COMPLETE', None)
-    done = subprocess.run([sys.executable, '-c', check], cwd=tmp_path, env=run_env,
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    first, second = done.stdout.split()
+    site, out = _run_from_install(ws / 'install' / 'rotrod_interfaces', tmp_path, (
+        'import rotrod_interfaces.msg as m, rotrod_interfaces.action as a\n'
+        'from rclpy.serialization import serialize_message as s\n'
+        'print(m.__file__); s(m.WhirlEstimate(f1=1.5)); print(a.SpinUp.Goal.PLANNED)'))
+    first, second = out.split()
     assert first.startswith(str(site)) and second == 'planned'
-    prefix = ws / 'install' / 'simulation_interfaces'
+    site, out = _run_from_install(ws / 'install' / 'simulation_interfaces', tmp_path, (
+        'import simulation_interfaces.srv as s\n'
+        'from rclpy.serialization import serialize_message as m\n'
+        'print(s.__file__); m(s.StepSimulation.Request(steps=3)); '
+        'print(s.ResetSimulation.Request.SCOPE_ALL)'))
+    first, second = out.split()
+    assert first.startswith(str(site)) and second == '255'
+
+
+def _run_from_install(prefix: Path, cwd: Path, code: str) -> tuple[Path, str]:
+    """Run ``code`` with only the colcon install ``prefix``'s Python package and
+    libraries added; return (its site-packages, the output)."""
     site = next(prefix.glob('lib/python3*/site-packages'))
-    check = ('import simulation_interfaces.srv as s\n'
-             'from rclpy.serialization import serialize_message as m\n'
-             'print(s.__file__); m(s.StepSimulation.Request(steps=3)); '
-             'print(s.ResetSimulation.Request.SCOPE_ALL)')
     run_env = dict(os.environ, PYTHONPATH=str(site),
                    LD_LIBRARY_PATH=f'{prefix / "lib"}{os.pathsep}'
                                    f'{os.environ.get("LD_LIBRARY_PATH", "")}')
     run_env.pop('_ROS_WHEELS_BOOTSTRAP_COMPLETE', None)
-    done = subprocess.run([sys.executable, '-c', check], cwd=tmp_path, env=run_env,
+    done = subprocess.run([sys.executable, '-c', code], cwd=cwd, env=run_env,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    first, second = done.stdout.split()
-    assert first.startswith(str(site)) and second == '255'
+    return site, done.stdout

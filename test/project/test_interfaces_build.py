@@ -8,7 +8,6 @@ which is also what a publisher announces on the graph; the exported CMake files 
 longer point at the wheels' build machine.
 """
 
-import importlib.util
 import json
 import math
 import re
@@ -16,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from interface_tools import build_interfaces
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / 'rotrod_interfaces'
@@ -24,15 +24,6 @@ SHARE = PREFIX / 'share' / 'rotrod_interfaces'
 HASH = re.compile(r'RIHS01_[0-9a-f]{64}')
 
 
-def _build_module():
-    spec = importlib.util.spec_from_file_location(
-        'build_interfaces', ROOT / 'tools' / 'build_interfaces.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-build_interfaces = _build_module()
 
 
 def _interfaces():

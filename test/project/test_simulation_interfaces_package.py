@@ -14,13 +14,13 @@ tools/build_interfaces.py (the same generators, pinned in constraints.txt).
 """
 
 import hashlib
-import importlib.util
 import json
 import re
 import sys
 from pathlib import Path
 
 import pytest
+from interface_tools import build_interfaces
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / 'simulation_interfaces'
@@ -73,15 +73,6 @@ PUBLISHED_HASHES = {
 """The published package's type hash of each type (its top-level entry)."""
 
 
-def _build_module():
-    spec = importlib.util.spec_from_file_location(
-        'build_interfaces', ROOT / 'tools' / 'build_interfaces.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-build_interfaces = _build_module()
 
 
 def normalized(text: str) -> str:

@@ -27,6 +27,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from interface_tools import build_interfaces
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import SetSimulationState
 
@@ -136,18 +137,9 @@ def test_a_standard_client_steps_resets_replays_and_plays(ros_processes):
     assert Path(report['module']).resolve().is_relative_to(venv)
 
 
-def _build_module():
-    import importlib.util
-    spec = importlib.util.spec_from_file_location(
-        'build_interfaces', ROOT / 'tools' / 'build_interfaces.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.mark.long      # builds simulation_interfaces once more (minutes; then cached)
 def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes):
-    build = _build_module()
+    build = build_interfaces
     build.ensure_built(Path(sys.prefix), package='simulation_interfaces',
                        install_prefix=SEPARATE_PREFIX, install=False)
     site = next(SEPARATE_PREFIX.glob('lib/python3*/site-packages'))
