@@ -147,3 +147,16 @@ def help_lines(interfaces) -> list:
             out.append(f'{title}:')
             out += [f'  {i.name}  {i.type_name}  {i.description}' for i in rows]
     return out
+
+
+def take(subscription):
+    """Take a message from ``subscription`` now, as rclpy's executor takes it.
+
+    Returns (message, info), or None: nothing there, or the subscription or its
+    context is gone.
+    """
+    try:
+        with subscription.handle:
+            return subscription.handle.take_message(subscription.msg_type, subscription.raw)
+    except Exception:  # the subscription or its context is gone
+        return None

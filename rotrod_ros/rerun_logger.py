@@ -241,7 +241,7 @@ class RerunLogger(Node):
         while time.monotonic() < deadline:       # the topics every tick publishes, in turn
             progress = False
             for sub, handle in self._every_tick:
-                got = _take(sub)
+                got = interfaces.take(sub)
                 if got is not None:
                     handle(got[0], got[1])
                     taken += 1
@@ -249,7 +249,7 @@ class RerunLogger(Node):
             if not progress:
                 break
         for sub, handle in self._sometimes:       # then the others, drained, whatever the
-            while (got := _take(sub)) is not None:    # budget (they come far less often)
+            while (got := interfaces.take(sub)) is not None:    # budget (they come far less often)
                 handle(got[0], got[1])
                 taken += 1
         return taken
@@ -270,13 +270,6 @@ class RerunLogger(Node):
         self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
 
 
-def _take(sub):
-    """(message, info) taken from a subscription, or None (none, or it is gone)."""
-    try:
-        with sub.handle:
-            return sub.handle.take_message(sub.msg_type, sub.raw)
-    except Exception:  # the subscription or its context is gone
-        return None
 
 
 def _parser() -> argparse.ArgumentParser:

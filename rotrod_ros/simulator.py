@@ -236,13 +236,8 @@ class SimulatorNode(Node):
         taken = 0
         for name in COMMAND_TOPICS:
             subscription = self._io[name]
-            while True:
-                with subscription.handle:
-                    message = subscription.handle.take_message(subscription.msg_type,
-                                                               subscription.raw)
-                if message is None:
-                    break
-                subscription.callback(message[0])
+            while (got := interfaces.take(subscription)) is not None:
+                subscription.callback(got[0])
                 taken += 1
         return taken
 

@@ -547,8 +547,15 @@ class RealTimeLoop(Generic[SettingsT]):
 
     def _publish_now(self, sample: Sample) -> None:
         """Publish ``sample`` at once, with the current settings (lock held)."""
+        self._send(sample, (self.settings, self.engine.config, self._snapshot()))
+
+    def _send(self, sample: Sample, context: tuple) -> None:
+        """Hand ``sample`` to the host and count it.
+
+        ``context``: the (settings, config, snapshot) it was computed with.
+        """
         self._published = (sample.time, self.clock.monotonic())
-        self._publish(sample, self.settings, self.engine.config, self._snapshot())
+        self._publish(sample, *context)
         self.publications += 1
 
     def _finish_step_requests(self, problem: str) -> None:
@@ -619,9 +626,7 @@ class RealTimeLoop(Generic[SettingsT]):
             if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop,
                                                                      spin):
                 return False
-            self._published = (sample.time, self.clock.monotonic())
-            self._publish(sample, *context)
-            self.publications += 1
+            self._send(sample, context)
         self.report()
         # the next tick is due at an absolute time: the publication's wait and the work
         # after it (estimate, status) must not delay it
