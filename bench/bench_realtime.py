@@ -210,10 +210,10 @@ def fast_run(node, duration: float) -> dict:
 def fast_recorded_run(duration: float) -> dict:
     """As fast as possible with rerun_logger recording (KEEP_ALL both ways): speed, and
     the share of the simulator's publications in the .rrd file."""
-    import re
     import tempfile
 
     from rotrod_core.reporting.recording import U, read_series
+    from rotrod_ros.simulator import stop_report
     out = Path(tempfile.mkdtemp(prefix='rotrod-bench-')) / 'fast.rrd'
     logger = subprocess.Popen([*console_script('rerun_logger'),
                                *ros_arguments(params={'output': str(out)})],
@@ -232,12 +232,11 @@ def fast_recorded_run(duration: float) -> dict:
         c1 = cpu_seconds(sim.proc.pid), cpu_seconds(logger.pid)
         wall = time.monotonic() - t0
         sim.stop()
-        done = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications',
-                         sim.proc.stderr.read())
+        done = stop_report(sim.proc.stderr.read())
     finally:
         logger.send_signal(signal.SIGINT)
         logger.communicate(timeout=120)
-    t_end, published = float(done.group(1)), int(done.group(2))
+    t_end, published = done.time, done.publications
     t, _ = read_series(out, U)
     k = np.round(t / PERIOD).astype(int)
     contiguous = bool(np.array_equal(k, np.arange(len(k))))

@@ -22,7 +22,6 @@ import argparse
 import math
 import os
 import random
-import re
 import signal
 import subprocess
 import sys
@@ -46,6 +45,7 @@ from rotrod_core.reporting import recording
 from .child_process import ending_with_this_process
 from .install import executable, share_file
 from .parameters import defaults, rod_params
+from .simulator import stop_report
 
 EXECUTABLES = ('simulator', 'rerun_logger', 'profile_publisher')
 PARAM_FILES = ('config/table1.yaml', 'config/demo.yaml')
@@ -258,8 +258,8 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
 
 def late_setpoints(simulator_log: str) -> int | None:
     """The simulator's count of late setpoints from its stop line (None: not found)."""
-    found = re.search(r'stopped at simulated time .* (\d+) late setpoints', simulator_log)
-    return int(found[1]) if found else None
+    report = stop_report(simulator_log)
+    return None if report is None else report.late_setpoints
 
 
 def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict[str, Any]:

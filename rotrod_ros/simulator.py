@@ -17,9 +17,10 @@ from __future__ import annotations
 import argparse
 import gc
 import math
+import re
 import sys
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
@@ -69,6 +70,39 @@ SAMPLE_QOS_DEPTH = 100
 LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
 """The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
 rerun_logger) gets every publication, the physics waiting for it when it falls behind."""
+
+class StopReport(NamedTuple):
+    """What the simulator says on stopping (its last log line, :func:`stop_line`)."""
+
+    time: float
+    """Simulated time, s."""
+    publications: int
+    held_up: int
+    """Publications a KEEP_ALL subscriber held up."""
+    dropped: int
+    late_setpoints: int
+
+
+def stop_line(report: StopReport) -> str:
+    """The log line of ``report``."""
+    return (f'stopped at simulated time {report.time:.3f} s after {report.publications} '
+            f'publications ({report.held_up} held up by a KEEP_ALL subscriber, '
+            f'{report.dropped} dropped; {report.late_setpoints} late setpoints)')
+
+
+_STOP_LINE = re.compile(r'stopped at simulated time ([0-9.]+) s after (\d+) publications '
+                        r'\((\d+) held up by a KEEP_ALL subscriber, (\d+) dropped; (\d+) '
+                        r'late setpoints\)')
+
+
+def stop_report(log: str) -> StopReport | None:
+    """The last :func:`stop_line` in a simulator's ``log`` read back (None: none)."""
+    found = _STOP_LINE.findall(log)
+    if not found:
+        return None
+    t, *counts = found[-1]
+    return StopReport(float(t), *map(int, counts))
+
 
 INTERFACES = (
     sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity); with '
@@ -297,10 +331,9 @@ class SimulatorNode(Node):
         if self.lossless:
             self._keep_all.flush(SAMPLE_TOPICS, FLUSH_TIMEOUT)
         sent = self._keep_all
-        self.get_logger().info(f'stopped at simulated time {self.engine.time:.3f} s after '
-                               f'{self.loop.publications} publications ({sent.held_up} held '
-                               f'up by a KEEP_ALL subscriber, {sent.dropped} dropped; '
-                               f'{self.engine.late_setpoints} late setpoints)')
+        self.get_logger().info(stop_line(StopReport(
+            self.engine.time, self.loop.publications, sent.held_up, sent.dropped,
+            self.engine.late_setpoints)))
 
     # ----------------------------------------------------------------- publishing
     def _publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,

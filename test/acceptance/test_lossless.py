@@ -15,7 +15,6 @@ frequencies message with its own sample's stamp (Eq. 28 at that sample's w), eve
 estimate at its 0.1 s.
 """
 
-import re
 import signal
 import time
 
@@ -28,6 +27,7 @@ from sensor_msgs.msg import JointState
 from rotrod_core import RodParams, simulate
 from rotrod_core.analysis.modes import dynamic_frequencies
 from rotrod_core.reporting import recording
+from rotrod_ros.simulator import stop_report
 
 pytestmark = pytest.mark.ros
 
@@ -59,9 +59,8 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
     wall = time.monotonic() - t0             # to the signal: t_end is simulated time then
     sim.signal_group(signal.SIGINT)
     assert sim.wait(timeout=30) == 0
-    done = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications',
-                     sim.output)
-    t_end, published = float(done.group(1)), int(done.group(2))
+    done = stop_report(sim.output)
+    t_end, published = done.time, done.publications
     assert 'not every publication acknowledged' not in sim.output
     logger.signal_group(signal.SIGINT)
     assert logger.wait(timeout=60) == 0

@@ -8,7 +8,6 @@ offline model says for the speed that rod published.
 import ast
 import math
 import os
-import re
 import signal
 import subprocess
 import time
@@ -24,6 +23,7 @@ from sensor_msgs.msg import JointState
 from rotrod_core import RodParams, simulate
 from rotrod_core.command.profiles import TableProfile
 from rotrod_ros import fleet
+from rotrod_ros.simulator import stop_report
 
 ROOT = Path(__file__).resolve().parents[2]
 RODS = 3
@@ -60,9 +60,9 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
         # cores with six real-time ones, may miss some while it waits for a core
         log = (tmp_path / f'{ns[1:]}_simulator.log').read_text()
         assert 'ready' in log
-        stopped = re.search(r'stopped at simulated time ([0-9.]+) s after (\d+) publications', log)
+        stopped = stop_report(log)
         assert stopped, log[-2000:]
-        t_stop, published = float(stopped[1]), int(stopped[2])
+        t_stop, published = stopped.time, stopped.publications
         assert abs(published - (math.floor(t_stop * 100 + 1e-6) + 1)) <= 1, (t_stop, published)
         # the true state by stamp: t, theta, w, u, v, du, dv (the tip joints)
         rows = np.array(sorted((stamp(j), j.position[0], j.velocity[0], j.position[1],

@@ -495,3 +495,11 @@ def test_markers_show_disk_rod_mass_and_a_bounded_trail_at_a_viewable_rate(
     assert (tip.x, tip.y, tip.z) == (last[3].pose.position.x, last[3].pose.position.y,
                                      last[3].pose.position.z)      # the mass on the tip
     assert tip.z == pytest.approx(RodParams().rod_length)
+
+
+def test_the_stop_line_reads_back_as_written():
+    from rotrod_ros.simulator import StopReport, stop_line, stop_report
+    said = StopReport(12.345, 1235, 2, 0, 7)
+    log = f'[INFO] ready\n[INFO] {stop_line(said)}\n'
+    assert stop_report(log) == said
+    assert stop_report('[INFO] ready\n') is None
