@@ -15,16 +15,23 @@ its first passage of ``deflection_limit``.
 Data is written in batches every ``flush_period`` seconds. On SIGINT, SIGTERM or the
 end of the run the messages already received but not yet handled are taken too, the
 last batch is written and the file closed, so ``rerun rrd verify`` accepts it and it
-holds every message received up to the signal. Killed outright (SIGKILL), the logger
-leaves a file without footer holding everything up to its last write, at most
-``flush_period`` old: it loads with ``RrdReader(path).stream()`` and
-``rerun rrd optimize FILE -o COPY`` makes a complete copy of it.
+holds every message received up to the signal. The file has no footer (the index of
+its chunks) unless ``footer:=true``: rerun keeps the footer's manifest in memory for the
+whole run, so a logger without it keeps a flat memory however long it records (rerun's
+advice for long streaming sessions). A file without footer loads in the viewer and with
+``RrdReader(path).stream()``; ``rerun rrd verify`` refuses it and
+``rerun rrd optimize FILE -o COPY`` makes a complete copy of it. ``footer:=true`` suits
+bounded runs (``rotrod demo`` sets it): a clean end writes the footer, so
+``rerun rrd verify`` accepts the file. Killed outright (SIGKILL), the logger leaves a
+file without footer holding everything up to its last write, at most ``flush_period``
+old.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from dataclasses import replace
@@ -69,6 +76,9 @@ PARAMETERS: tuple[Spec, ...] = (
     Spec('serve_port', 9876, 'TCP port of the live server (127.0.0.1 only)', '', 1, 65535),
     Spec('flush_period', 0.25, 'wall time between writes of the buffered data (> 0)', 's',
          0.0, 60.0),
+    Spec('footer', False, 'write the RRD footer (an index of every chunk) at a clean end; '
+         'rerun keeps it in memory until then, so memory grows with the run: for bounded '
+         'runs (without it: rerun rrd optimize FILE -o COPY adds one)'),
     Spec('record_from', 'start', 'start: record from the first message; motion: keep only '
          'the last pretrigger seconds until the hub\'s angular velocity first differs from '
          'the first one received, then record everything (the file begins just before the '
@@ -126,7 +136,8 @@ class RerunLogger(Node):
                                           serve_port=values['serve_port'] if values['serve']
                                           else None,
                                           pretrigger=values['pretrigger'] if on_motion
-                                          else None, mechanism=self.mechanism)
+                                          else None, mechanism=self.mechanism,
+                                          footer=values['footer'])
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
         except Exception as exc:  # rerun raises several kinds for a bad path or port
@@ -162,7 +173,9 @@ class RerunLogger(Node):
         self._timer = self.create_timer(values['flush_period'], self._flush,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
-        self.get_logger().info(f'recording to {self.writer.path}{where}')
+        footer = ('with a footer at the end' if values['footer'] else
+                  'without footer (flat memory; footer:=true writes one at the end)')
+        self.get_logger().info(f'recording to {self.writer.path}, {footer}{where}')
 
     def _joint_indices(self, names) -> tuple | None:
         """Indices of hub, tip_radial, tip_tangential in ``names`` (cached per name list).
@@ -278,8 +291,14 @@ def _parser() -> argparse.ArgumentParser:
         *parameter_specs.help_lines(PARAMETERS, READ_ONLY)])
 
 
+RERUN_LOG = 'warn,re_log_encoding::rrd::file_sink=error'
+"""rerun's log filter in the logger (unless RUST_LOG is set): its file sink warns at
+every start without footer, which is this node's default, and the node says so itself."""
+
+
 def main(args: list | None = None) -> int:
     """Entry point of ``ros2 run rotrod rerun_logger``."""
+    os.environ.setdefault('RUST_LOG', RERUN_LOG)      # before rerun is imported
     return node_main.run(NODE_NAME, RerunLogger, _parser(), args, finished=RerunLogger.close)
 
 

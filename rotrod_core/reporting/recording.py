@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import uuid
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -80,11 +81,16 @@ class RecordingWriter:
     """Writes a rotrod run to a .rrd file (and optionally serves it on 127.0.0.1).
 
     Call the ``add_*`` methods per message, :meth:`flush` periodically, :meth:`close`
-    at the end (also on a signal): it sends what is buffered and writes the footer.
-    A process killed without :meth:`close` (SIGKILL) leaves a file without footer that
-    holds everything flushed: :func:`read_series` (``RrdReader(path).stream()``) reads
-    it, ``rerun rrd verify`` refuses it, and ``rerun rrd optimize FILE -o COPY`` writes
-    a complete copy.
+    at the end (also on a signal): it sends what is buffered and, with ``footer``,
+    writes the footer. A file without footer (``footer=False``, or a process killed
+    without :meth:`close`: SIGKILL) holds everything flushed: :func:`read_series`
+    (``RrdReader(path).stream()``) and the viewer read it, ``rerun rrd verify`` refuses
+    it, and ``rerun rrd optimize FILE -o COPY`` writes a complete copy.
+
+    ``footer``: rerun's file sink keeps a manifest entry of every chunk written in
+    memory until the end, for the footer (each :meth:`flush` writes a chunk per entity
+    that has new data): memory grows with the length of the run. ``footer=False`` keeps
+    it flat, rerun's advice for long streaming sessions (the live logger's default).
 
     With ``pretrigger`` (s), the writer starts armed, as an oscilloscope: it keeps
     only the last ``pretrigger`` seconds of stamp time and writes nothing until
@@ -101,7 +107,8 @@ class RecordingWriter:
 
     def __init__(self, path: str | Path, *, application_id: str = 'rotrod',
                  serve_port: int | None = None, pretrigger: float | None = None,
-                 mechanism: Mechanism | None = None, origin: float | None = None):
+                 mechanism: Mechanism | None = None, origin: float | None = None,
+                 footer: bool = True):
         if pretrigger is not None and not (math.isfinite(pretrigger) and pretrigger >= 0):
             raise ValueError(f'pretrigger must be a finite number of seconds >= 0, got '
                              f'{pretrigger!r}')
@@ -116,7 +123,7 @@ class RecordingWriter:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
-        sinks: list = [rr.FileSink(str(self.path))]
+        sinks: list = [rr.FileSink(str(self.path), write_footer=footer)]
         self.serve_uri = None
         if serve_port is not None:
             server = rr.GrpcServerSink(bind_ip='127.0.0.1', port=int(serve_port))
@@ -391,10 +398,25 @@ def write_run(path: str | Path, run, *, sample_interval: float = 0.01,
     return len(keep)
 
 
-def entity_paths(path: str | Path) -> list[str]:
-    """Entity paths in a recording (needs a complete file, with its footer)."""
+def _chunks(path: str | Path):
+    """The chunks of a recording, in file order, with or without its footer.
+
+    Without footer (the live logger's default) ``RrdReader`` warns that ``store()`` is
+    not available; only ``stream()`` is used here.
+    """
     from rerun.chunk import RrdReader
-    return list(RrdReader(str(path)).store().schema().entity_paths())
+    with warnings.catch_warnings():
+        warnings.filterwarnings('ignore', message='RRD file has no footer')
+        reader = RrdReader(str(path))
+    return reader.stream()
+
+
+def entity_paths(path: str | Path) -> list[str]:
+    """Entity paths in a recording, in the order first written (with or without footer)."""
+    seen: dict[str, None] = {}
+    for chunk in _chunks(path):
+        seen.setdefault(str(chunk.entity_path))
+    return list(seen)
 
 
 def read_series(path: str | Path, entity: str) -> tuple[np.ndarray, np.ndarray]:
@@ -404,10 +426,9 @@ def read_series(path: str | Path, entity: str) -> tuple[np.ndarray, np.ndarray]:
     """
     import pyarrow as pa
     import pyarrow.compute as pc
-    from rerun.chunk import RrdReader
     entity = '/' + entity.strip('/')
     times, values = [], []
-    for chunk in RrdReader(str(path)).stream():
+    for chunk in _chunks(path):
         if str(chunk.entity_path) != entity or chunk.is_static:
             continue
         batch = chunk.to_record_batch()
@@ -441,11 +462,10 @@ def read_component(path: str | Path, entity: str, column: str,
     components: the strings).
     """
     import pyarrow as pa
-    from rerun.chunk import RrdReader
     entity = '/' + entity.strip('/')
     times: list = []
     rows: list = []
-    for chunk in RrdReader(str(path)).stream():
+    for chunk in _chunks(path):
         if str(chunk.entity_path) != entity or chunk.is_static:
             continue
         batch = chunk.to_record_batch()
