@@ -13,6 +13,7 @@ largest |w'|. Eq. 26 (15 s spin-up) gives the residual to compare with.
 """
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -23,6 +24,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / 'bench')]
 
 import results  # noqa: E402  (bench/results.py)
+
+from rotrod_core.command import plan_cache  # noqa: E402
+
+os.environ[plan_cache.ENV] = plan_cache.OFF     # the time of planning, not of a cache read
 from results import Comparison, Row, Target  # noqa: E402
 
 from rotrod_core import (  # noqa: E402

@@ -10,22 +10,46 @@ Importing the hooks and fixtures below registers them for every test under ``tes
 * fixtures ``ros_processes`` (start/stop node processes) and ``ros_node`` (an rclpy node in
   the test process).
 
+Plans (``rotrod_core.command.plan_cache``) are cached for the run in a temporary
+directory of its own (``ROTROD_PLAN_CACHE``, inherited by child processes): each
+request is planned once per run, never read from a user's cache or an earlier run.
+
 Tests marked ``long`` (minutes: the soak) are left out unless the ``-m`` expression names
 the marker: ``./run.sh test`` runs the rest, ``./run.sh test -m long`` the long ones
 (``.ci/run`` runs both). Unlike ``-m "not long"`` in addopts, this also keeps them out
 of a run such as ``-m ros``.
 """
 
+import os
 import re
+import shutil
+import tempfile
 
+import ros_harness
 from ros_harness import (  # noqa: F401 (registered by pytest through this module)
-    pytest_configure,
     pytest_report_header,
     pytest_runtest_makereport,
-    pytest_unconfigure,
     ros_node,
     ros_processes,
 )
+
+from rotrod_core.command import plan_cache
+
+_PLAN_CACHE = 'rotrod_plan_cache'
+
+
+def pytest_configure(config):
+    ros_harness.pytest_configure(config)
+    folder = tempfile.mkdtemp(prefix='rotrod-plans-')
+    setattr(config, _PLAN_CACHE, folder)
+    os.environ[plan_cache.ENV] = folder
+
+
+def pytest_unconfigure(config):
+    ros_harness.pytest_unconfigure(config)
+    folder = getattr(config, _PLAN_CACHE, None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(config, items):

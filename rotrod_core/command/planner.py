@@ -24,6 +24,7 @@ and the robust band).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -32,6 +33,7 @@ from scipy.interpolate import BSpline
 from scipy.optimize import nnls
 
 import rotrod_core.model.propagation as propagation
+from rotrod_core.command import plan_cache
 from rotrod_core.command.profiles import SpinUpProfile, spin_up_knots
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.model.params import RodParams
@@ -615,7 +617,10 @@ def plan_spin_up(params: RodParams, omega_target: float, *, omega_start: float =
     if residual < RESOLUTION * scale:
         raise ValueError(f'residual = {residual:g} m is below what the planner resolves: '
                          f'{RESOLUTION:g} x the deflection scale {scale:g} m')
-    return _search(family)
+    request = {'params': dataclasses.asdict(params), 'omega_target': wf, 'omega_start': ws,
+               'deflection_limit': limit, 'residual': residual, 'robust': robust,
+               'max_angular_acceleration': max_acc}
+    return plan_cache.cached_plan(request, lambda: _search(family))
 
 
 def r0_floor(params: RodParams) -> float:

@@ -27,7 +27,7 @@ from rotrod_core import (
     simulate,
     whirl_residual,
 )
-from rotrod_core.command import planner
+from rotrod_core.command import plan_cache, planner
 
 TABLE1 = RodParams()
 RECT = RodParams(section='rectangular', section_width=0.004, section_thickness=0.003)
@@ -316,6 +316,7 @@ def test_every_blas_kernel_plans_the_same_durations_and_summaries():
     runs = []
     for extra in settings:
         env = {k: v for k, v in os.environ.items() if not k.startswith('OPENBLAS')}
+        env[plan_cache.ENV] = plan_cache.OFF            # each process plans for itself
         runs.append(subprocess.Popen([sys.executable, '-c', _PLAN_SUMMARY],
                                      env={**env, **extra}, stdout=subprocess.PIPE, text=True))
     results = []
