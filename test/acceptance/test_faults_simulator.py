@@ -127,6 +127,7 @@ def observed_simulator(ros_processes, ros_node, ns, **params):
 
 # --------------------------------------------------------------------------- a. flood
 
+@pytest.mark.long       # a 10 s stress measurement (memory flat under a flood)
 def test_a_10_khz_command_flood_keeps_the_physics_on_time_and_memory_flat(
         ros_processes, ros_node, request):
     """cmd/omega at 10 kHz for 10 s, 100 times the usual stream and 10 times the physics

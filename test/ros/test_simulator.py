@@ -73,6 +73,7 @@ def test_step_to_2_rad_s_settles_at_the_static_deflection_and_eq28(
         assert m.header.frame_id == ''
 
 
+@pytest.mark.long       # 40 s of real time; the main job streams Eq. 26 through the nodes
 def test_eq26_streamed_at_100_hz_matches_the_offline_run(ros_processes, ros_node, request):
     ns = namespace(request)
     sim = start_simulator(ros_processes, ns, real_time_factor=1.0)
