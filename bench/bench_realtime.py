@@ -121,11 +121,18 @@ MOTION = {'initial.omega': 2.0, 'initial.u': 1e-3}
 (the estimate has a motion to estimate; at rest it is cheaper)."""
 
 
-def realtime_run(node, duration: float, tuned: bool = False, **params) -> dict:
+def realtime_run(node, duration: float, tuned: bool = False, must_publish: bool = True,
+                 **params) -> dict:
+    """The simulator's real-time run with ``params``; ``must_publish`` False: a run that
+    does not publish within 30 s is measured as it is (0 messages), not an error."""
     sim = Simulator(tuned, **{**MOTION, **params})
     joint = collect(node, 'joint_states', JointState)
     try:
-        node.spin_until(lambda: len(joint) > 50, 30, 'simulator publishing')
+        try:
+            node.spin_until(lambda: len(joint) > 50, 30, 'simulator publishing')
+        except HarnessTimeout:
+            if must_publish:
+                raise
         c0, t0, n0 = cpu_seconds(sim.proc.pid), time.monotonic(), len(joint)
         node.spin_for(duration)
         c1, t1 = cpu_seconds(sim.proc.pid), time.monotonic()
@@ -348,7 +355,10 @@ def measure(duration: float = 60.0) -> tuple:
         fast = fast_run(node, min(20.0, duration))
     recorded = fast_recorded_run(min(20.0, duration))
     with rclpy_test_node('rotrod_bench') as node:
-        events = realtime_run(node, min(10.0, duration), executor='events')
+        # rclpy's EventsExecutor starves the physics thread (a few % of the publications
+        # get out, or none): measured as it is, as the table's comparison says
+        events = realtime_run(node, min(10.0, duration), must_publish=False,
+                              executor='events')
         no_markers = realtime_run(node, min(20.0, duration), markers=False)
         no_estimate = realtime_run(node, min(20.0, duration), estimate_window=0.0)
         spin = realtime_run(node, min(20.0, duration), publication_spin=SPIN)
