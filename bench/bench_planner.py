@@ -24,10 +24,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / 'bench')]
 
 import results  # noqa: E402  (bench/results.py)
-
-from rotrod_core.command import plan_cache  # noqa: E402
-
-os.environ[plan_cache.ENV] = plan_cache.OFF     # the time of planning, not of a cache read
 from results import Comparison, Row, Target  # noqa: E402
 
 from rotrod_core import (  # noqa: E402
@@ -37,7 +33,9 @@ from rotrod_core import (  # noqa: E402
     simulate,
     whirl_residual,
 )
+from rotrod_core.command import plan_cache  # noqa: E402
 
+os.environ[plan_cache.ENV] = plan_cache.OFF     # the time of planning, not of a cache read
 P = RodParams()
 CASES = (('nominal', {}, 1.5, 2.5e-7), ('robust 0.1', {'robust': 0.1, 'residual': 1e-6}, 4.0,
                                          1e-6),

@@ -51,7 +51,7 @@ def main():
     if not args.quick:
         names.append("robust 0.1, |w'| <= 0.45")
     base = {k: v for k, v in os.environ.items() if not k.startswith('OPENBLAS')}
-    base['ROTROD_PLAN_CACHE'] = 'off'           # each kernel plans for itself
+    base['ROTROD_PLAN_CACHE'] = 'off'   # plan_cache.ENV, .OFF: each kernel plans for itself
     print("| request (0 -> 2 rad/s, 3 mm) | OpenBLAS | duration [s] | peak [mm] "
           "| largest \\|w'\\| [rad/s^2] | planning time [s] |")
     print('|---|---|---|---|---|---|')

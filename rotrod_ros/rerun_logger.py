@@ -283,8 +283,6 @@ class RerunLogger(Node):
         self.get_logger().info(f'wrote {self.writer.samples} samples to {self.writer.path}')
 
 
-
-
 def _parser() -> argparse.ArgumentParser:
     return node_main.parser('rerun_logger', __doc__, [
         *interfaces.help_lines(INTERFACES), 'Parameters:',

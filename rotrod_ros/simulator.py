@@ -71,6 +71,7 @@ LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
 """The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
 rerun_logger) gets every publication, the physics waiting for it when it falls behind."""
 
+
 class StopReport(NamedTuple):
     """What the simulator says on stopping (its last log line, :func:`stop_line`)."""
 

@@ -25,6 +25,7 @@ import re
 import shutil
 import tempfile
 
+import pytest
 import ros_harness
 from ros_harness import (  # noqa: F401 (registered by pytest through this module)
     pytest_report_header,
@@ -35,21 +36,20 @@ from ros_harness import (  # noqa: F401 (registered by pytest through this modul
 
 from rotrod_core.command import plan_cache
 
-_PLAN_CACHE = 'rotrod_plan_cache'
+_PLAN_CACHE = pytest.StashKey[str]()
 
 
 def pytest_configure(config):
     ros_harness.pytest_configure(config)
-    folder = tempfile.mkdtemp(prefix='rotrod-plans-')
-    setattr(config, _PLAN_CACHE, folder)
-    os.environ[plan_cache.ENV] = folder
+    config.stash[_PLAN_CACHE] = os.environ[plan_cache.ENV] = tempfile.mkdtemp(
+        prefix='rotrod-plans-')
 
 
 def pytest_unconfigure(config):
-    ros_harness.pytest_unconfigure(config)
-    folder = getattr(config, _PLAN_CACHE, None)
+    folder = config.stash.get(_PLAN_CACHE, None)
     if folder:
         shutil.rmtree(folder, ignore_errors=True)
+    ros_harness.pytest_unconfigure(config)
 
 
 def pytest_collection_modifyitems(config, items):
