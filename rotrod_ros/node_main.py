@@ -142,9 +142,9 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
                 _wake_on_signals(node)
             elif until is None:      # rclpy's C++ EventsExecutor has no guard conditions
                 until = _never       # so the spin polls (spin_once below)
-        if started:
-            started(node)
         try:
+            if started:
+                started(node)
             if until is None:
                 executor.spin()
             else:

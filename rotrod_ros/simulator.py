@@ -382,17 +382,8 @@ def _parser() -> argparse.ArgumentParser:
 
 def _started(node: SimulatorNode) -> None:
     priority = node.settings.realtime_priority
-    # the objects made so far (modules, node, messages) live as long as the process:
-    # out of the collector's sight, so that a collection in the physics thread scans
-    # only what the run makes (measured with gc.callbacks: without it, generation-1
-    # collections took several milliseconds, the largest publication lags)
-    gc.collect()
-    gc.freeze()
-    node.start()
-    if priority > 1:
-        # the executor thread stamps a command's arrival: one below the physics, so a
-        # busy machine does not delay commands past setpoint_delay either
-        scheduling.run_current_thread_at(priority - 1, node.get_logger(), 'executor thread')
+    # said before the loop thread starts, so a user (or a test) reads what the node will
+    # wait for before the loop's own "starting: ..." line
     s, c = node.settings, node.engine.config
     wanted, longest = s.subscriber_wait()
     if wanted:
@@ -409,6 +400,17 @@ def _started(node: SimulatorNode) -> None:
         + (', paused at simulated time 0 (start_paused): step or play through '
            '~/step_simulation, ~/simulate_steps or ~/set_simulation_state'
            if s.start_paused else ''))
+    # the objects made so far (modules, node, messages) live as long as the process:
+    # out of the collector's sight, so that a collection in the physics thread scans
+    # only what the run makes (measured with gc.callbacks: without it, generation-1
+    # collections took several milliseconds, the largest publication lags)
+    gc.collect()
+    gc.freeze()
+    node.start()
+    if priority > 1:
+        # the executor thread stamps a command's arrival: one below the physics, so a
+        # busy machine does not delay commands past setpoint_delay either
+        scheduling.run_current_thread_at(priority - 1, node.get_logger(), 'executor thread')
 
 
 def main(args: list[str] | None = None) -> int:
