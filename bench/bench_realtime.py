@@ -19,8 +19,11 @@ process's subscriptions:
 * the machine's floor: how late a bare Python thread at SCHED_FIFO 50 wakes from
   sleeping to 10 ms deadlines (as cyclictest), over the same duration, without and
   with a CPU wake-up latency request of 0 us (idle CPUs poll instead of halting);
-* the same real-time run with the experimental EventsExecutor (parameter
-  ``executor:=events``), with ordinary scheduling of the physics thread
+* what a wake-up costs: the CPU time of one rclpy publication (std_msgs/Float64, no
+  subscriber) in a loop and as the first work after a 10 ms sleep, the simulator's
+  pattern (on a virtual machine whose idle CPU halts, the woken thread finds its
+  caches and translations cold);
+* the same real-time run with ordinary scheduling of the physics thread
   (``realtime_priority:=0``), with the opt-in poll of the clock before each
   publication (``publication_spin``), with the markers and the estimate off (what each
   costs), and tuned: with ``config/realtime.yaml`` (the machine-wide CPU wake-up latency
@@ -121,18 +124,12 @@ MOTION = {'initial.omega': 2.0, 'initial.u': 1e-3}
 (the estimate has a motion to estimate; at rest it is cheaper)."""
 
 
-def realtime_run(node, duration: float, tuned: bool = False, must_publish: bool = True,
-                 **params) -> dict:
-    """The simulator's real-time run with ``params``; ``must_publish`` False: a run that
-    does not publish within 30 s is measured as it is (0 messages), not an error."""
+def realtime_run(node, duration: float, tuned: bool = False, **params) -> dict:
+    """The simulator's real-time run with ``params``."""
     sim = Simulator(tuned, **{**MOTION, **params})
     joint = collect(node, 'joint_states', JointState)
     try:
-        try:
-            node.spin_until(lambda: len(joint) > 50, 30, 'simulator publishing')
-        except HarnessTimeout:
-            if must_publish:
-                raise
+        node.spin_until(lambda: len(joint) > 50, 30, 'simulator publishing')
         c0, t0, n0 = cpu_seconds(sim.proc.pid), time.monotonic(), len(joint)
         node.spin_for(duration)
         c1, t1 = cpu_seconds(sim.proc.pid), time.monotonic()
@@ -282,6 +279,42 @@ print(json.dumps(late))
 """
 
 
+WAKE_COST = """
+import json, sys, time
+import rclpy
+from std_msgs.msg import Float64
+sleep, trials = float(sys.argv[1]), int(sys.argv[2])
+rclpy.init()
+node = rclpy.create_node('rotrod_wake_cost')
+publisher = node.create_publisher(Float64, 'rotrod_wake_cost', 10)
+msg = Float64()
+def cost():
+    t0 = time.thread_time()
+    publisher.publish(msg)
+    return time.thread_time() - t0
+hot = [cost() for _ in range(trials)]
+first, second = [], []
+for _ in range(trials):
+    time.sleep(sleep)
+    first.append(cost())
+    second.append(cost())
+print(json.dumps({'hot': hot, 'first': first, 'second': second}))
+"""
+
+
+def wake_cost(sleep: float = PERIOD, trials: int = 500) -> dict:
+    """CPU time (thread) of one rclpy publication, hot in a loop and as the first and
+    second work after a ``sleep`` s sleep (the simulator sleeps to each publication),
+    in a child process of its own: what waking up costs on this machine."""
+    out = subprocess.run([sys.executable, '-c', WAKE_COST, str(sleep), str(trials)],
+                         capture_output=True, text=True, check=True, timeout=120)
+    r = json.loads(out.stdout)
+    return {'sleep_s': sleep, 'trials': trials,
+            'hot_us': 1e6 * float(np.median(r['hot'])),
+            'after_sleep_us': 1e6 * float(np.median(r['first'])),
+            'second_us': 1e6 * float(np.median(r['second']))}
+
+
 def sleep_floor(duration: float, priority: int = 50, cpu_latency: int = -1) -> dict:
     """The machine's own wake-up lateness: a bare Python thread (no ROS, no work) at
     SCHED_FIFO ``priority`` sleeping to deadlines every 10 ms for ``duration`` s, as
@@ -355,10 +388,6 @@ def measure(duration: float = 60.0) -> tuple:
         fast = fast_run(node, min(20.0, duration))
     recorded = fast_recorded_run(min(20.0, duration))
     with rclpy_test_node('rotrod_bench') as node:
-        # rclpy's EventsExecutor starves the physics thread (a few % of the publications
-        # get out, or none): measured as it is, as the table's comparison says
-        events = realtime_run(node, min(10.0, duration), must_publish=False,
-                              executor='events')
         no_markers = realtime_run(node, min(20.0, duration), markers=False)
         no_estimate = realtime_run(node, min(20.0, duration), estimate_window=0.0)
         spin = realtime_run(node, min(20.0, duration), publication_spin=SPIN)
@@ -367,13 +396,13 @@ def measure(duration: float = 60.0) -> tuple:
         tuned = realtime_run(node, duration, tuned=True)
     floor = sleep_floor(duration)
     floor_awake = sleep_floor(duration, cpu_latency=0)
+    wake = wake_cost()
     raw = {'simulator_code': code, 'rmw': os.environ.get('RMW_IMPLEMENTATION'),
            'isolation': isolation_mode(), 'realtime': rt, 'command_latency': latency,
-           'fast': fast, 'fast_recorded': recorded, 'events_executor': events,
+           'fast': fast, 'fast_recorded': recorded, 'wake_cost': wake,
            'ordinary_scheduling': ordinary, 'no_markers': no_markers,
            'no_estimate': no_estimate, 'publication_spin': spin, 'cpu_parts': parts,
            'tuned': tuned, 'sleep_floor': floor, 'sleep_floor_cpu_latency_0': floor_awake}
-    ev = f"EventsExecutor ({events['duration_s']:.0f} s run)"
     od = f"ordinary scheduling, realtime_priority 0 ({ordinary['duration_s']:.0f} s run)"
     tu = f"{TUNED} ({tuned['duration_s']:.0f} s run)"
     sp = (f"publication_spin {SPIN * 1e3:g} ms: polls the clock before each publication "
@@ -399,8 +428,7 @@ def measure(duration: float = 60.0) -> tuple:
                            no_markers['cpu_percent_of_one_core']),
                 Comparison(f"estimate off, estimate_window 0 "
                            f"({no_estimate['duration_s']:.0f} s run)",
-                           no_estimate['cpu_percent_of_one_core']),
-                Comparison(ev, events['cpu_percent_of_one_core'])], fmt='.1f'),
+                           no_estimate['cpu_percent_of_one_core'])], fmt='.1f'),
         *(row(f"physics thread CPU by part at the defaults ({parts['duration_s']:.0f} s run, "
               f"a timer around each, in-process): {name}", part['percent'], '% of one core',
               fmt='.2f', note=f"{part['us_per_call']:.0f} us x {part['calls']} calls")
@@ -439,9 +467,13 @@ def measure(duration: float = 60.0) -> tuple:
                 od, ordinary['interval_error_ms_p99'],
                 f"max {ordinary['interval_error_ms_max']:.2f} ms")]),
         row('messages received', received(rt), '% of expected', better='higher', fmt='.2f',
-            note=f"{rt['messages']} / {rt['expected_messages']}",
-            comparisons=[Comparison(ev, received(events),
-                                    f"{events['messages']} / {events['expected_messages']}")]),
+            note=f"{rt['messages']} / {rt['expected_messages']}"),
+        row(f"machine: CPU time of the first rclpy publication after a "
+            f"{wake['sleep_s'] * 1e3:g} ms sleep (std_msgs/Float64, no subscriber, median "
+            f"of {wake['trials']}, no other work)", wake['after_sleep_us'], 'us', fmt='.1f',
+            note=f"the next one {wake['second_us']:.1f} us",
+            comparisons=[Comparison('the same publication in a loop, without sleeping',
+                                    wake['hot_us'])]),
         row(f"cmd/omega -> tip/deflection latency (max of {latency['trials']})",
             latency['latency_ms_max'], 'ms',
             target=Target('<=', 2e3 * PERIOD, text='<= 2 publish periods (20 ms)'),
@@ -464,9 +496,7 @@ def measure(duration: float = 60.0) -> tuple:
                  f"{recorded['logger_cpu_percent']:.0f} % of a core; "
                  f"{recorded['wall_s']:.0f} s run"),
         row('exit after SIGINT', rt['exit_after_sigint_s'], 's', fmt='.2f',
-            note=exit_note(rt['exit_after_sigint_s']),
-            comparisons=[Comparison(ev, events['exit_after_sigint_s'],
-                                    exit_note(events['exit_after_sigint_s']))]),
+            note=exit_note(rt['exit_after_sigint_s'])),
     ]
     return rows, raw
 

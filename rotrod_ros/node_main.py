@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 
 import rclpy
-from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
@@ -22,18 +22,6 @@ def parser(prog: str, doc: str, lines: list[str]) -> argparse.ArgumentParser:
         prog=prog, description=doc.split('\n')[0],
         epilog='\n'.join([doc.split('\n', 2)[2], *lines]),
         formatter_class=argparse.RawDescriptionHelpFormatter)
-
-
-def make_executor(name: str, logger, context=None):
-    """The rclpy executor named ``name``: 'single_threaded' or 'events' (a warning)."""
-    if name == 'events':
-        from rclpy.experimental import EventsExecutor
-        logger.warning(
-            'executor=events: rclpy\'s EventsExecutor is experimental (its spin() was '
-            'measured busy-waiting on a full core; bench/bench_realtime.py measures it); '
-            'single_threaded is the default')
-        return EventsExecutor(context=context)
-    return SingleThreadedExecutor(context=context)
 
 
 class ConfigurationError(ValueError):
@@ -92,12 +80,8 @@ def _wake_on_signals(node) -> None:
     threading.Thread(target=watch, name='signal_wakeup', daemon=True).start()
 
 
-def _never(node) -> bool:
-    return False
-
-
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
-        args: list | None = None, *, make_executor: Callable | None = None,
+        args: list | None = None, *,
         until: Callable | None = None, started: Callable | None = None,
         finished: Callable | None = None, own_signals: bool = False) -> int:
     """Parse non-ROS arguments (``--help``), build the node, spin, shut down cleanly.
@@ -107,14 +91,12 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         make_node: builds the node (may raise ConfigurationError: exit status 2).
         parser: the executable's argument parser (for ``--help``).
         args: argv (default sys.argv).
-        make_executor: executor for the node (default SingleThreadedExecutor).
         until: spin until it returns true (default: until shutdown).
         started: called with the node before spinning.
         finished: called with the node after spinning (also on a signal).
         own_signals: SIGINT and SIGTERM end the spin with the context still up, so
             ``finished`` can still publish and wait for acknowledgements (Python's
-            handlers, woken through a pipe: :func:`_wake_on_signals`; with an executor
-            without guard conditions, the spin wakes every 0.1 s instead).
+            handlers, woken through a pipe: :func:`_wake_on_signals`).
 
     SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
     ``own_signals``); an error raised by rclpy while the context is shutting down is
@@ -135,13 +117,10 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         except ConfigurationError as exc:
             print(f'{name}: invalid configuration: {exc}', file=sys.stderr)
             return 2
-        executor = (make_executor or (lambda n: SingleThreadedExecutor()))(node)
+        executor = SingleThreadedExecutor()
         executor.add_node(node)
         if own_signals:
-            if isinstance(executor, Executor):
-                _wake_on_signals(node)
-            elif until is None:      # rclpy's C++ EventsExecutor has no guard conditions
-                until = _never       # so the spin polls (spin_once below)
+            _wake_on_signals(node)
         try:
             if started:
                 started(node)

@@ -31,9 +31,6 @@ __all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'Parameter
            'ROD_SPECS', 'SPECS_BY_NAME', 'Spec', 'build_settings', 'check_value', 'defaults',
            'descriptor', 'rod_params']
 
-EXECUTORS = ('single_threaded', 'events')
-
-
 def rod_spec(info: FieldInfo) -> Spec:
     """The parameter of a RodParams field: its unit, description and range.
 
@@ -69,7 +66,6 @@ class NodeSettings(PublicationSettings):
 
     deflection_noise: float = 0.0
     noise_seed: int = 0
-    executor: str = 'single_threaded'
     wait_for_subscribers: int = -1
 
     def subscriber_wait(self) -> tuple[int, float]:
@@ -184,11 +180,6 @@ NODE_SPECS = (
          'lockstep stepping (~/step_simulation, ~/simulate_steps) or a later play: a '
          'logger or a controller connects before time starts. Stamps are then simulated '
          'time, published on /clock', read_only=True),
-    Spec('executor', _NODE.executor,
-         'rclpy executor for commands, services and parameters: single_threaded | events '
-         '(rclpy\'s experimental EventsExecutor: measured worse, see '
-         'bench/bench_realtime.py); physics runs in its own thread',
-         choices=EXECUTORS, read_only=True),
     Spec('realtime_priority', _NODE.realtime_priority,
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '

@@ -395,8 +395,7 @@ def _started(node: SimulatorNode) -> None:
                if math.isfinite(longest) else ')'))
     node.get_logger().info(
         f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
-        f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}, '
-        f'executor {s.executor}'
+        f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}'
         + (', paused at simulated time 0 (start_paused): step or play through '
            '~/step_simulation, ~/simulate_steps or ~/set_simulation_state'
            if s.start_paused else ''))
@@ -416,8 +415,6 @@ def _started(node: SimulatorNode) -> None:
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run rotrod simulator`` and the ``simulator`` console script."""
     return node_main.run(NODE_NAME, SimulatorNode, _parser(), args,
-                         make_executor=lambda node: node_main.make_executor(
-                             node.settings.executor, node.get_logger()),
                          started=_started, finished=SimulatorNode.stop, own_signals=True)
 
 

@@ -136,7 +136,7 @@ def test_the_simulator_checks_a_change_when_set_and_applies_it_after(context):
         assert not refused.successful and 'too low' in refused.reason
         assert node.engine.config.physics_rate == 1000.0
         assert node.get_parameter('physics_rate').value == 1000.0
-        read_only = node.set_parameters([Parameter('executor', value='events')])[0]
-        assert not read_only.successful and node.settings.executor == 'single_threaded'
+        read_only = node.set_parameters([Parameter('start_paused', value=True)])[0]
+        assert not read_only.successful and node.settings.start_paused is False
     finally:
         node.destroy_node()
