@@ -568,22 +568,23 @@ def _whirls(fit, data, cfg, window):
     return out
 
 
-def _estimate(t, z, cfg: WhirlSettings, start=None):
+def _estimate(t, z, cfg: WhirlSettings, start=None, halves=None):
     """The estimate of one window, and the poles (1/s) of its whirls.
 
     The model is linear in z: the fit runs on z scaled by a power of two (exact) to
     a largest component in [1, 2), so that squares neither overflow (|z| ~ 1e300)
     nor underflow (|z| ~ 1e-300); amplitudes, offset and noise are scaled back.
+    ``halves``: the half-window fits of earlier windows (:func:`_split_check`).
     """
     if len(z) == 0:
-        return _estimate_unit(t, z, cfg, start)
+        return _estimate_unit(t, z, cfg, start, halves)
     largest = float(max(np.max(np.abs(z.real)), np.max(np.abs(z.imag))))
     if largest == 0:
-        return _estimate_unit(t, z, cfg, start)
+        return _estimate_unit(t, z, cfg, start, halves)
     e = math.frexp(largest)[1] - 1
     unit = np.empty_like(z)
     unit.real, unit.imag = np.ldexp(z.real, -e), np.ldexp(z.imag, -e)
-    est, poles = _estimate_unit(t, unit, cfg, start)
+    est, poles = _estimate_unit(t, unit, cfg, start, halves)
 
     def back(x):
         with np.errstate(over='ignore'):
@@ -596,7 +597,7 @@ def _estimate(t, z, cfg: WhirlSettings, start=None):
     return est, poles
 
 
-def _estimate_unit(t, z, cfg: WhirlSettings, start=None):
+def _estimate_unit(t, z, cfg: WhirlSettings, start=None, halves=None):
     """:func:`_estimate` on data of order 1.
 
     The poles include whirls rejected for decay or uncertainty: they are the start
@@ -625,13 +626,13 @@ def _estimate_unit(t, z, cfg: WhirlSettings, start=None):
     if start:
         warm, lost, poles = _fitted_estimate(data, cfg, window, start, common)
         if not lost:
-            return _split_check(t, z, cfg, per_block, warm, poles), poles
+            return _split_check(t, z, cfg, per_block, warm, poles, halves), poles
     grid = _Grid(data.grid, data.grid_tau, cfg.drift_degree)
     poles = _start_values(grid, data.interval, cfg, window)
     if not poles:
         return _no_estimate('no frequency in the band', **common)
     estimate, _, poles = _fitted_estimate(data, cfg, window, poles, common)
-    return _split_check(t, z, cfg, per_block, estimate, poles), poles
+    return _split_check(t, z, cfg, per_block, estimate, poles, halves), poles
 
 
 def _half_whirls(t, z, cfg, per_block, poles):
@@ -660,7 +661,24 @@ def _half_whirls(t, z, cfg, per_block, poles):
             if kind != 'noise' and names.count(name) == 1}
 
 
-def _split_check(t, z, cfg, per_block, estimate, poles):
+_KEPT_HALVES = 64
+"""Half-window fits an online estimator keeps (the newest)."""
+
+
+def _kept_half_whirls(halves, t, z, cfg, per_block, poles):
+    """:func:`_half_whirls`, from ``halves`` when these samples were fitted before."""
+    if halves is None or not len(t):
+        return _half_whirls(t, z, cfg, per_block, poles)
+    key = (float(t[0]), float(t[-1]), len(t), complex(z[0]), complex(z[-1]), per_block)
+    found = halves.get(key)
+    if found is None:
+        found = halves[key] = _half_whirls(t, z, cfg, per_block, poles)
+        if len(halves) > _KEPT_HALVES:
+            del halves[next(iter(halves))]
+    return found
+
+
+def _split_check(t, z, cfg, per_block, estimate, poles, halves=None):
     """``estimate`` without the whirls whose halves of the window disagree with the whole.
 
     A whirl is rejected when the mean of its frequencies over the two halves differs
@@ -670,6 +688,11 @@ def _split_check(t, z, cfg, per_block, estimate, poles):
     that the drift takes over a half window has a large standard deviation there, and
     is not judged on it). Whirls a half does not detect, and windows too short to fit
     the model over each half (fewer than ``min_blocks`` blocks), are not checked.
+
+    ``halves`` (a dict, the online estimator's): half-window fits kept from earlier
+    windows, by the half's samples. A sliding window whose update interval divides
+    half the window meets its first half again as an earlier window's second half:
+    the same samples, fitted to the same tolerance (from that window's poles).
     """
     accepted = [name for name in ('forward', 'backward')
                 if not math.isnan(getattr(estimate, name).frequency)]
@@ -677,8 +700,8 @@ def _split_check(t, z, cfg, per_block, estimate, poles):
         return estimate
     poles = np.asarray(poles, dtype=complex)
     half = len(t) // 2
-    first = _half_whirls(t[:half], z[:half], cfg, per_block, poles)
-    second = _half_whirls(t[half:], z[half:], cfg, per_block, poles)
+    first = _kept_half_whirls(halves, t[:half], z[:half], cfg, per_block, poles)
+    second = _kept_half_whirls(halves, t[half:], z[half:], cfg, per_block, poles)
     changes, reasons = {}, [estimate.reason] if estimate.reason else []
     for name in accepted:
         if name not in first or name not in second:    # a half cannot judge it
@@ -867,7 +890,9 @@ class WhirlEstimator:
     whirls (and searching afresh when that start loses one). Samples may arrive
     irregularly (dropped, jittered): the estimate handles that, and reports NaN for a
     gap longer than ``settings.max_gap`` of the window. Memory is a ring of about
-    twice the window.
+    twice the window. When ``update_interval`` divides half the window, a window's
+    first half is an earlier window's second half: its fit for the stationarity check
+    is kept and not repeated (each update then fits one half window, not two).
 
     Args:
         window: length of the analysed window, s (1 s resolves whirls above 0.1 Hz).
@@ -910,6 +935,7 @@ class WhirlEstimator:
         self._first = math.nan
         self._last_update = -math.inf
         self._poles: list[complex] = []
+        self._halves: dict = {}
         self.estimate = WhirlEstimate(reason='window not filled')
 
     @property
@@ -953,7 +979,8 @@ class WhirlEstimator:
         self._begin += int(np.searchsorted(self._t[self._begin:self._end], oldest))
         self.estimate, self._poles = _estimate(self._t[self._begin:self._end],
                                                self._z[self._begin:self._end],
-                                               self.settings, start=self._poles)
+                                               self.settings, start=self._poles,
+                                               halves=self._halves)
         self._last_update = newest
         return self.estimate
 

@@ -232,6 +232,46 @@ def test_online_estimate_equals_the_batch_estimate_of_its_window():
     assert online.f2 == pytest.approx(batch.f2, rel=1e-7)
 
 
+
+def test_online_estimates_fit_each_half_window_once_and_equal_the_batch(monkeypatch):
+    """Sliding by 0.1 s over a 1 s window, each window's first half is the second half of
+    the window 0.5 s earlier: the online estimator fits it once. Its estimates, accepted
+    and rejected alike, are still the batch estimates of their windows (two whirls whose
+    frequencies jump by 3 % at t = 3 s: the windows across the jump are not stationary,
+    and the split check rejects them)."""
+    half_fits = []
+    fit_half = whirl_module._half_whirls
+    monkeypatch.setattr(whirl_module, '_half_whirls',
+                        lambda t, *a: half_fits.append((t[0], len(t))) or fit_half(t, *a))
+    t = np.arange(0.0, 6.0, DT)
+    jump = np.where(t < 3.0, 1.0, 1.03)
+    phase = 2 * np.pi * np.cumsum(jump) * DT
+    z = (2e-4 + 1e-3 * np.exp(1j * 1.5 * phase) + 5e-4 * np.exp(-1j * 2.2 * phase)
+         + 1e-6 * np.array([1, 1j]) @ np.random.default_rng(7).standard_normal((2, len(t))))
+    estimator = WhirlEstimator(window=1.0, sample_interval=DT, update_interval=0.1)
+    online = [(i, est) for i, s in enumerate(zip(t, z.real, z.imag))
+              if (est := estimator.push(*s)) is not None]
+    online_fits = list(half_fits)
+    half_fits.clear()
+    rejected = 0
+    for i, est in online:
+        window = slice(i + 1 - N, i + 1)
+        batch = estimate_whirl(t[window], z.real[window], z.imag[window])
+        assert batch.time == est.time
+        for f_online, f_batch in ((est.f1, batch.f1), (est.f2, batch.f2)):
+            assert math.isnan(f_online) == math.isnan(f_batch), (est.time, est.reason,
+                                                                 batch.reason)
+            if math.isnan(f_online):
+                rejected += 1
+            else:
+                assert f_online == pytest.approx(f_batch, rel=1e-7)
+    assert rejected > 0 and len(online) > 40
+    # the batch fits both halves of every window it checks; online, a half that an
+    # earlier window had is not fitted again: each half once, about half as many fits
+    assert len(online_fits) == len(set(online_fits)) == len(set(half_fits))
+    assert len(online_fits) < 0.7 * len(half_fits)
+
+
 LIVE_WINDOWS = Path(__file__).parent / 'data' / 'live_windows_off_eq28.csv'
 
 
