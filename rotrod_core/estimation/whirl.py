@@ -142,11 +142,15 @@ class WhirlSettings:
             set_(self, name, finite_number(f'WhirlSettings.{name}', getattr(self, name),
                                            positive=True))
         split = self.max_split_change
-        if not (isinstance(split, (int, float, np.floating)) and not isinstance(split, bool)
-                and split > 0):           # NaN fails too
+        try:                              # an int past the float range overflows
+            number = (float(split) if isinstance(split, (int, float, np.floating))
+                      and not isinstance(split, bool) else math.nan)
+        except OverflowError:
+            number = math.nan
+        if not number > 0:                # NaN fails too
             raise ValueError('WhirlSettings.max_split_change must be a positive number or '
                              f'inf, got {split!r}')
-        set_(self, 'max_split_change', float(split))
+        set_(self, 'max_split_change', number)
         set_(self, 'detection_db', finite_number('WhirlSettings.detection_db',
                                                  self.detection_db))
         if not math.isfinite(self.block_interval):
