@@ -31,6 +31,7 @@ __all__ = ['ALL_SPECS', 'ENGINE_SPECS', 'NODE_SPECS', 'NodeSettings', 'Parameter
            'ROD_SPECS', 'SPECS_BY_NAME', 'Spec', 'build_settings', 'check_value', 'defaults',
            'descriptor', 'rod_params']
 
+
 def rod_spec(info: FieldInfo) -> Spec:
     """The parameter of a RodParams field: its unit, description and range.
 

@@ -232,7 +232,6 @@ def test_online_estimate_equals_the_batch_estimate_of_its_window():
     assert online.f2 == pytest.approx(batch.f2, rel=1e-7)
 
 
-
 def test_online_estimates_fit_each_half_window_once_and_equal_the_batch(monkeypatch):
     """Sliding by 0.1 s over a 1 s window, each window's first half is the second half of
     the window 0.5 s earlier: the online estimator fits it once. Its estimates, accepted
