@@ -481,6 +481,10 @@ def ros_arguments(*, node_name: str | None = None, namespace: str | None = None,
 
 # --------------------------------------------------------------------------- in-test rclpy
 
+DISCOVERY_SETTLE = 0.2
+"""Wait of a new service client once its service is ready, s (:meth:`RosTestNode.call_service`)."""
+
+
 class RosTestNode:
     """An rclpy node in the test process, spun on demand by a ``SingleThreadedExecutor``.
 
@@ -491,6 +495,7 @@ class RosTestNode:
         self.node = node
         self.executor = executor
         self.context = context
+        self._clients: dict[tuple[Any, str], Any] = {}
 
     def spin_once(self, timeout: float = 0.05) -> None:
         """Run at most one ready callback, waiting up to ``timeout`` seconds."""
@@ -552,15 +557,25 @@ class RosTestNode:
 
     def call_service(self, srv_type: Any, name: str, request: Any = None,
                      timeout: float = 10.0) -> Any:
-        """Call a service (waiting for it to appear) and return the response."""
-        client = self.node.create_client(srv_type, name)
-        try:
+        """Call a service (waiting for it to appear) and return the response.
+
+        One client per service and type, kept for the node's life. A new client waits
+        DISCOVERY_SETTLE s once its service is ready: the client sees the server's
+        endpoints before the server has seen the client's response reader, and
+        rmw_fastrtps waits for that reader only max_blocking_time (100 ms) before it
+        drops the response ("failed to send response (timeout)", ros2/ros2#1253);
+        seen here once, on a busy machine.
+        """
+        key = (srv_type, name)
+        client = self._clients.get(key)
+        if client is None:
+            client = self._clients[key] = self.node.create_client(srv_type, name)
             self.spin_until(client.service_is_ready, timeout, f'service {name} available')
-            future = client.call_async(request if request is not None else srv_type.Request())
-            self.spin_until(future.done, timeout, f'response from {name}')
-            return future.result()
-        finally:
-            self.node.destroy_client(client)
+            self.spin_for(DISCOVERY_SETTLE)
+        self.spin_until(client.service_is_ready, timeout, f'service {name} available')
+        future = client.call_async(request if request is not None else srv_type.Request())
+        self.spin_until(future.done, timeout, f'response from {name}')
+        return future.result()
 
 
 @contextlib.contextmanager
