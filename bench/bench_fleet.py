@@ -87,25 +87,33 @@ def stamp_of(raw: bytes) -> float:
 
 
 MODES = {
-    'defaults': 'ten simulator processes at their defaults, only a namespace each',
+    'defaults': 'a simulator process per rod at its defaults, only a namespace each',
     'fleet': 'the fleet command (config/fleet.yaml: markers and estimates off)',
     'streamed': 'the fleet command, each rod streamed Eq. 26 by a profile publisher of '
                 'its own (twice the processes)',
+    'floor': "the machine's floor: in each namespace instead of a simulator, its four "
+             'per-sample publications from a bare rclpy thread (bench/publication_floor.py: '
+             'no physics, estimate or markers)',
 }
 """The runs: how the rods are started."""
+ROD_PROCESS = {'defaults': 'simulator', 'fleet': 'simulator', 'streamed': 'simulator',
+               'floor': 'floor'}
+"""What each run's process per rod is named after (its CPU is the rods')."""
 
 
 def start_rods(mode: str, rods: int, logs: Path) -> Processes:
     """Start the rods as ``mode`` says (MODES); return the processes once all are ready."""
-    if mode != 'defaults':
+    if mode in ('fleet', 'streamed'):
         return fleet.start(rods, logs, profile=mode == 'streamed', env=dict(os.environ))
     procs = Processes(logs, ros_environment(dict(os.environ)))
     try:
         for ns in fleet.namespaces(rods):
-            procs.start(f'{ns[1:]}_simulator',
-                        [*executable('simulator'), '--ros-args', '-r', f'__ns:={ns}'])
+            argv = ([sys.executable, str(ROOT / 'bench' / 'publication_floor.py'), '--ns', ns]
+                    if mode == 'floor' else
+                    [*executable('simulator'), '--ros-args', '-r', f'__ns:={ns}'])
+            procs.start(f'{ns[1:]}_{ROD_PROCESS[mode]}', argv)
         for ns in fleet.namespaces(rods):
-            procs.wait_for_log(f'{ns[1:]}_simulator', 'ready', 60)
+            procs.wait_for_log(f'{ns[1:]}_{ROD_PROCESS[mode]}', 'ready', 60)
     except BaseException:
         procs.stop_all()
         raise
@@ -121,7 +129,7 @@ def fleet_run(node, rods: int, duration: float, mode: str) -> dict:
             node.spin_until(lambda: all(len(r) > 50 for r in received.values()), 60,
                             'every rod publishing')
             publishers = {ns: node.node.create_publisher(Float64, f'{ns}/cmd/omega', 10)
-                          for ns in received if mode != 'streamed'}
+                          for ns in received if mode in ('defaults', 'fleet')}
             for ns, pub in publishers.items():  # one setpoint each, as a user sends it
                 node.spin_until(lambda p=pub: p.get_subscription_count() > 0, 30,
                                 f'{ns}/cmd/omega matched')
@@ -155,7 +163,7 @@ def fleet_run(node, rods: int, duration: float, mode: str) -> dict:
                        'receive_lag_ms_p99': 1e3 * float(np.percentile(got, 99)),
                        'receive_lag_ms_max': 1e3 * float(np.max(got)),
                        'callback_lag_ms_p99': 1e3 * float(np.percentile(called, 99))}
-    sims = [n for n in pids if n.endswith('_simulator')]
+    sims = [n for n in pids if n.endswith('_' + ROD_PROCESS[mode])]
     return {'rods': rods, 'mode': mode, 'duration_s': span, 'per_rod': per_rod,
             'cpu_percent_simulators': 100 * sum(c1[n] - c0[n] for n in sims) / span,
             'cpu_percent_all': 100 * sum(c1[n] - c0[n] for n in pids) / span,
@@ -194,7 +202,7 @@ def measure(rods: int = 10, duration: float = 60.0) -> tuple:
         return [Comparison(f"{MODES[m]} ({runs[m]['duration_s']:.0f} s run)"
                            + (f'; {note(runs[m])}' if note else ''), w[m][key]
                            if key in w[m] else runs[m][key])
-                for m in ('fleet', 'streamed')]
+                for m in ('fleet', 'streamed', 'floor')]
 
     d = w['defaults']
     out = [
