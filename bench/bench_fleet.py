@@ -5,7 +5,7 @@
 In a private network namespace through test/isolate.py, one subscriber (this process)
 takes every rod's ``tip/deflection`` as serialized bytes (reading the stamp from them:
 deserializing 1000 messages a second in Python would cost the machine more than a
-rod). Three runs (MODES), each every rod at 2 rad/s:
+rod). Four runs (MODES), each every rod at 2 rad/s but the floor's:
 
 - ``defaults``: N ``simulator`` processes as a user starts them, with nothing but a
   namespace (/rod0 .. /rod{N-1}); one setpoint each on ``cmd/omega``. The issue's
@@ -15,7 +15,10 @@ rod). Three runs (MODES), each every rod at 2 rad/s:
   of a core in total;
 - ``fleet``: what ``rotrod fleet`` runs (:func:`rotrod_ros.fleet.start`: config/fleet.yaml
   turns the markers and the estimates off), in the same run;
-- ``streamed``: the fleet command with a profile publisher per rod streaming Eq. 26.
+- ``streamed``: the fleet command with a profile publisher per rod streaming Eq. 26;
+- ``floor``: in each namespace, instead of a simulator, bench/publication_floor.py (its
+  four per-sample publications, nothing else; no setpoint): the machine's floor under
+  the ``defaults`` run (docs/realtime.md#floor).
 
 Per rod: the publication lag behind simulated time (DDS source time minus the stamp)
 and the receive lag, at p99 and maximum, and the messages received against the 100 Hz
@@ -42,6 +45,7 @@ if not os.environ.get('ROTROD_ISOLATION'):
     os.execv(sys.executable, [sys.executable, str(ROOT / 'test' / 'isolate.py'),
                               sys.executable, *sys.argv])
 
+import publication_floor  # noqa: E402  (bench/publication_floor.py)
 import results  # noqa: E402  (bench/results.py)
 from bench_realtime import use_this_checkout  # noqa: E402
 from node_probes import cpu_seconds  # noqa: E402
@@ -108,7 +112,7 @@ def start_rods(mode: str, rods: int, logs: Path) -> Processes:
     procs = Processes(logs, ros_environment(dict(os.environ)))
     try:
         for ns in fleet.namespaces(rods):
-            argv = ([sys.executable, str(ROOT / 'bench' / 'publication_floor.py'), '--ns', ns]
+            argv = ([sys.executable, str(publication_floor.SCRIPT), '--ns', ns]
                     if mode == 'floor' else
                     [*executable('simulator'), '--ros-args', '-r', f'__ns:={ns}'])
             procs.start(f'{ns[1:]}_{ROD_PROCESS[mode]}', argv)
@@ -181,7 +185,7 @@ def worst(run: dict) -> dict:
 
 
 def measure(rods: int = 10, duration: float = 60.0) -> tuple:
-    """The three runs (MODES); return (:class:`results.Row` list, raw results)."""
+    """The runs (MODES); return (:class:`results.Row` list, raw results)."""
     code = use_this_checkout()
     with rclpy_test_node('rotrod_fleet_bench') as node:
         runs = {mode: fleet_run(node, rods, duration, mode) for mode in MODES}

@@ -64,6 +64,7 @@ if not os.environ.get('ROTROD_ISOLATION'):
     os.execv(sys.executable, [sys.executable, str(ROOT / 'test' / 'isolate.py'),
                               sys.executable, *sys.argv])
 
+import publication_floor  # noqa: E402  (bench/publication_floor.py)
 import results  # noqa: E402  (bench/results.py)
 from node_probes import collect, cpu_seconds, stamp  # noqa: E402
 from results import Comparison, Row, Target  # noqa: E402
@@ -127,7 +128,7 @@ class PublicationFloor(Simulator):
 
     def __init__(self):
         self.proc = subprocess.Popen(
-            [sys.executable, str(ROOT / 'bench' / 'publication_floor.py')],
+            [sys.executable, str(publication_floor.SCRIPT)],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 

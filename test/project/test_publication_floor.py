@@ -13,13 +13,17 @@ import numpy as np
 import pytest
 from node_probes import collect, namespace, stamp
 
+from rotrod_core.model.interface import JOINT_NAMES, ROTOR_FRAME, WORLD_FRAME
 from rotrod_ros.simulator import INTERFACES
 
 pytestmark = pytest.mark.ros
 
 FLOOR = Path(__file__).resolve().parents[2] / 'bench' / 'publication_floor.py'
 PER_SAMPLE = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies')
-"""The topics the simulator publishes with every sample (rotrod_ros.simulator)."""
+"""The topics the simulator publishes with every sample, named here independently of
+the floor's own list (rotrod_ros.simulator publishes these four with each sample)."""
+PERIOD = 0.01
+"""The simulator's default publish period, s (publish_rate 100 Hz)."""
 
 
 def test_the_floor_publishes_the_simulators_sample_topics_every_10_ms(
@@ -40,11 +44,18 @@ def test_the_floor_publishes_the_simulators_sample_topics_every_10_ms(
         assert np.all(steps > 0), topic
         # on an absolute 10 ms deadline: the median step is the period, and the
         # stamps keep to the grid (no drift over the run)
-        assert abs(np.median(steps) - 0.01) < 5e-4, (topic, np.median(steps))
+        assert abs(np.median(steps) - PERIOD) < 5e-4, (topic, np.median(steps))
         span = stamps[-1] - stamps[0]
-        assert abs(span / 0.01 - (len(stamps) - 1)) < 3, (topic, span, len(stamps))
+        assert abs(span / PERIOD - (len(stamps) - 1)) < 3, (topic, span, len(stamps))
         # stamped as it is published (the simulator's stamp is its publication instant)
         assert np.percentile(np.abs(source - stamps), 50) < 5e-3, topic
+    # the messages the simulator sends: its joints (3 values each) and its frames
+    joints = received['joint_states'][-1][0]
+    assert list(joints.name) == list(JOINT_NAMES)
+    for field in (joints.position, joints.velocity, joints.effort):
+        assert len(field) == len(JOINT_NAMES)
+    assert received['tip/deflection'][-1][0].header.frame_id == ROTOR_FRAME
+    assert received['tip/position'][-1][0].header.frame_id == WORLD_FRAME
 
 
 def test_the_floor_refuses_a_rate_that_is_not_a_positive_number(ros_processes):
