@@ -154,6 +154,31 @@ def test_a_stall_shorter_than_the_delay_does_not_reach_w():
     assert np.max(np.abs(w - a * (t - 0.2))) < 1e-6
 
 
+@pytest.mark.parametrize('first, stall', [(2, 0.05), (2, 0.15), (5, 0.1), (9, 0.19)])
+def test_a_stall_among_a_streams_first_samples_moves_only_its_first_nano_rad_s(first, stall):
+    """The paper's Eq. 26 (w' = 0 at t = 0) streamed at 100 Hz whose samples from
+    ``first`` on are held up for ``stall`` s and then arrive together: with too few
+    arrivals for a grid, the burst ramps from its arrival (the shaper's documented
+    catch-up), so w leaves 0 up to the delay early, but only by what Eq. 26 reaches in
+    those samples, and from there on w is the stream delayed by the delay."""
+    W, period, D = 2.0, 15.0, 0.2
+    eq26 = lambda t: W * (t / period - np.sin(2 * np.pi * t / period) / (2 * np.pi))  # noqa: E731
+    sh = OmegaSetpointShaper(0.5, delay=D)
+    n, last = 1601, first + round(stall / T)
+    for k in range(n):
+        sh.command(float(eq26(min(k * T, period))), T * (last if first <= k <= last else k))
+    t = np.arange(0.0, n * T + 1.0, T / 4)
+    w, wd = sample(sh, t)
+    moved = t[np.argmax(w != 0.0)]
+    assert min(D, last * T) - T / 4 <= moved <= D + T / 4     # not before the burst came
+    assert np.max(w[t < D]) <= eq26((last + 1) * T)            # what it moved by, rad/s
+    later = t >= D + (last + 1) * T
+    assert np.max(np.abs(w[later] - np.interp(t[later] - D, np.arange(n) * T,
+                                               eq26(np.minimum(np.arange(n) * T, period))))) \
+        < 1e-9
+    assert sh.late_setpoints == 0
+
+
 def brute_force_lower_hull(t):
     """Indices i such that (i, t_i) is a vertex of the lower convex hull (O(n^3))."""
     n = len(t)
