@@ -159,10 +159,12 @@ def test_the_fraction_is_applied_to_the_bound(monkeypatch):
         registry.planned_bound(math.inf)
 
 
-def test_a_plan_is_exactly_at_its_end_speeds_outside_the_change():
+def test_a_plan_is_exactly_at_its_end_speeds_outside_the_change(planned):
     """The streamed speeds before and after the change are the requested ones, to the
-    bit (the spline's value at its ends is not)."""
-    plan = profile_from_options('planned', {'robust': 0.1})      # config/planned.yaml's
+    bit (the spline's value at its ends is not). The robust plan of config/planned.yaml
+    (half a minute to plan) is held to the same through the nodes by the long tests
+    (test_spin_up_action: w arrives at exactly 2 rad/s)."""
+    plan = planned
     t = np.array([0.0, plan.t_start, plan.end_time, plan.end_time + 7.3])
     assert list(plan.omega(t)) == [0.0, 0.0, 2.0, 2.0]
     assert list(plan.omega_dot(t[[0, 3]])) == [0.0, 0.0]
