@@ -16,6 +16,7 @@ from properties import (  # the shared settings and strategies of the property t
     props,
 )
 
+from rotrod_core.command.profiles import Eq26Profile
 from rotrod_core.command.shaping import MAX_PATH_SEGMENTS, LowerEnvelope, OmegaSetpointShaper
 
 T = 0.01
@@ -161,21 +162,20 @@ def test_a_stall_among_a_streams_first_samples_moves_only_its_first_nano_rad_s(f
     arrivals for a grid, the burst ramps from its arrival (the shaper's documented
     catch-up), so w leaves 0 up to the delay early, but only by what Eq. 26 reaches in
     those samples, and from there on w is the stream delayed by the delay."""
-    W, period, D = 2.0, 15.0, 0.2
-    eq26 = lambda t: W * (t / period - np.sin(2 * np.pi * t / period) / (2 * np.pi))  # noqa: E731
+    D = 0.2
+    eq26 = Eq26Profile(period=15.0, omega_target=2.0).omega     # the stream: 0 -> 2 rad/s
     sh = OmegaSetpointShaper(0.5, delay=D)
-    n, last = 1601, first + round(stall / T)
+    n, last = 1601, first + round(stall / T)                   # 16 s: up to the hold
     for k in range(n):
-        sh.command(float(eq26(min(k * T, period))), T * (last if first <= k <= last else k))
+        sh.command(float(eq26(k * T)), T * (last if first <= k <= last else k))
     t = np.arange(0.0, n * T + 1.0, T / 4)
-    w, wd = sample(sh, t)
+    w, _ = sample(sh, t)
     moved = t[np.argmax(w != 0.0)]
     assert min(D, last * T) - T / 4 <= moved <= D + T / 4     # not before the burst came
     assert np.max(w[t < D]) <= eq26((last + 1) * T)            # what it moved by, rad/s
     later = t >= D + (last + 1) * T
-    assert np.max(np.abs(w[later] - np.interp(t[later] - D, np.arange(n) * T,
-                                               eq26(np.minimum(np.arange(n) * T, period))))) \
-        < 1e-9
+    stream = eq26(np.arange(n) * T)
+    assert np.max(np.abs(w[later] - np.interp(t[later] - D, np.arange(n) * T, stream))) < 1e-9
     assert sh.late_setpoints == 0
 
 
