@@ -16,6 +16,7 @@ rotrod sweep --grid eccentricity=0.0:0.2:5 damping_ratio=0,0.01 -o sweep.parquet
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import sys
@@ -34,6 +35,7 @@ from rotrod_core.command.registry import (
     describe,
     profile_from_options,
 )
+from rotrod_core.model.description import DriveLimits
 from rotrod_core.model.equations import COUPLINGS
 from rotrod_core.model.params import DEFAULT_HUB_RADIUS, FIELDS, RodParams
 from rotrod_core.offline.simulate import simulate
@@ -41,6 +43,8 @@ from rotrod_core.offline.simulate import simulate
 NUMBER_FIELDS = tuple(f for f in FIELDS if not f.choices)
 """The RodParams fields given as numbers (all but the section's choice)."""
 PARAM_FIELDS = tuple(f.name for f in NUMBER_FIELDS)
+LIMIT_FIELDS = tuple(f.name for f in dataclasses.fields(DriveLimits))
+"""The simulator's limits a robot description carries (rotrod urdf's options)."""
 UNITS = {f.name: f.unit for f in NUMBER_FIELDS}
 
 
@@ -242,6 +246,7 @@ def cmd_urdf(args) -> int:
     """Write the URDF for the parameter files and options (stdout without -o)."""
     from rotrod_core.model.urdf import (
         Ros2Control,
+        drive_limits_from_files,
         rod_params_from_files,
         simulator_parameters,
         urdf_text,
@@ -263,7 +268,10 @@ def cmd_urdf(args) -> int:
     if disk_radius is None:
         disk_radius = float(simulator_parameters(files, namespace=args.namespace).get(
             'disk_radius', DEFAULT_HUB_RADIUS))
-    text = urdf_text(params.replace(**given), disk_radius=disk_radius,
+    limits = drive_limits_from_files(files, namespace=args.namespace)
+    limits = dataclasses.replace(limits, **{
+        k: getattr(args, k) for k in LIMIT_FIELDS if getattr(args, k) is not None})
+    text = urdf_text(params.replace(**given), limits=limits, disk_radius=disk_radius,
                      ros2_control=ros2_control)
     if args.output is None:
         sys.stdout.write(text)
@@ -505,6 +513,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--disk-radius', type=_finite, default=None,
                    help="radius of the drawn disk [m] (default: the files' disk_radius, "
                         f'else {DEFAULT_HUB_RADIUS:g})')
+    for name, unit in zip(LIMIT_FIELDS, ('rad/s^2', 'rad/s', 'N m', 'm')):
+        p.add_argument(f'--{name.replace("_", "-")}', type=_finite, default=None,
+                       help=f"the simulator's {name} [{unit}] the description carries "
+                            "(default: the files', else the simulator's default)")
     p.add_argument('--ros2-control', action='append', choices=('velocity', 'effort'),
                    metavar='INTERFACE',
                    help="add a <ros2_control> block for topic_based_ros2_control's "

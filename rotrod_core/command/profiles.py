@@ -746,8 +746,12 @@ class SpinUpProfile(Profile):
         return self.t_start + self.duration
 
     def breakpoints(self) -> tuple[float, ...]:
-        """The spline's knots in time (its third derivative jumps there), s."""
-        return tuple(float(x) * self.duration for x in np.unique(self._w.t) if x > 0)
+        """The spline's knots in time (its third derivative jumps there), s.
+
+        From ``t_start`` on; the start itself too when it is after 0.
+        """
+        return tuple(self.t_start + float(x) * self.duration for x in np.unique(self._w.t)
+                     if self.t_start + float(x) * self.duration > 0)
 
     def with_peak(self, omega_peak: float) -> SpinUpProfile:
         """Control points scaled so the peak |w| is ``omega_peak``.

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotrod_core.model.description import DEFAULT_LIMITS
 from rotrod_core.numerics.checks import finite_number
 
 MIN_STREAM = 10
@@ -56,11 +57,11 @@ MAX_PATH_SEGMENTS = 50
 100 Hz). Every ramp of a stream holds its path, and a fast stream keeps a ramp per
 setpoint for the delay ahead: with 1000 segments a 10 kHz stream held ~160 MB of them."""
 
-DEFAULT_MAX_ANGULAR_ACCELERATION = 0.5
+DEFAULT_MAX_ANGULAR_ACCELERATION = DEFAULT_LIMITS.max_angular_acceleration
 """The default bound on |w'| of a shaped stream, rad/s^2: the simulator's
 ``max_angular_acceleration`` unless configured, and the bound the profile publisher's
-planned spin-up honours by default (one value for both). The paper's Eq. 26 peaks at
-0.27 rad/s^2; 0.5 rad/s^2 bends Table 1's rod back by 0.34 mm."""
+planned spin-up honours by default (one value for both; see
+:data:`~rotrod_core.model.description.DEFAULT_LIMITS`)."""
 
 MAX_OMEGA = 1e300
 """Largest |w| accepted as a setpoint or initial speed, rad/s: w and its differences

@@ -32,7 +32,24 @@ from rotrod_core.analysis.modes import (
     tangential_bending,
 )
 from rotrod_core.command.shaping import DEFAULT_MAX_ANGULAR_ACCELERATION, OmegaSetpointShaper
+from rotrod_core.command.trajectory import (
+    INVALID_GOAL,
+    OLD_HEADER_TIMESTAMP,
+    PATH_TOLERANCE_VIOLATED,
+    HubState,
+    HubTrajectory,
+    TrajectoryPoint,
+    TrajectoryRejected,
+)
+from rotrod_core.live.execution import (
+    CANCELED,
+    Tracking,
+    TrajectoryExecution,
+    TrajectoryGoal,
+    TrajectoryOutcome,
+)
 from rotrod_core.live.stepper import RealTimeStepper
+from rotrod_core.model.description import DEFAULT_LIMITS, DriveLimits
 from rotrod_core.model.equations import (
     STATE_FIELDS,
     State,
@@ -149,9 +166,9 @@ class EngineConfig:
     coupling: str = 'exact'
     physics_rate: float = 1000.0
     max_angular_acceleration: float = DEFAULT_MAX_ANGULAR_ACCELERATION
-    max_omega: float = 50.0
-    max_torque: float = 100.0
-    deflection_limit: float = 0.003
+    max_omega: float = DEFAULT_LIMITS.max_omega
+    max_torque: float = DEFAULT_LIMITS.max_torque
+    deflection_limit: float = DEFAULT_LIMITS.deflection_limit
     warn_fraction: float = 0.8
     max_deflection_ratio: float = MAX_DEFLECTION_RATIO
     critical_margin: float = 0.05
@@ -240,6 +257,12 @@ class EngineConfig:
         return 1.0 / self.physics_rate
 
     @property
+    def drive_limits(self) -> DriveLimits:
+        """The limits a command must stay within, as the robot description carries them."""
+        return DriveLimits(self.max_angular_acceleration, self.max_omega, self.max_torque,
+                           self.deflection_limit)
+
+    @property
     def max_deflection(self) -> float:
         """Validity bound on |r|, m: ``max_deflection_ratio`` x rod length (inf: none)."""
         if not self.max_deflection_ratio:
@@ -297,6 +320,11 @@ class SimulationEngine:
         so the shaped w was not the stream's delayed interpolation."""
         self.timeouts = 0
         """Number of command-timeout events so far (see :attr:`timed_out_at`)."""
+        self.execution: TrajectoryExecution | None = None
+        """The trajectory being executed (velocity drive), if any."""
+        self._pending_goal: TrajectoryGoal | None = None
+        self.trajectory_outcomes: deque[TrajectoryOutcome] = deque()
+        """How trajectory goals ended, oldest first, for the host to take."""
         self._reset_commands()
         self._cache_limits()
 
@@ -462,6 +490,7 @@ class SimulationEngine:
         w = self._check_command('omega setpoint', setpoint, 'velocity',
                                 self.config.max_omega, 'rad/s')
         t = self._command_time(at)
+        self._end_goals(INVALID_GOAL, 'preempted by an angular-velocity setpoint')
         late = self._shaper.late_setpoints
         try:
             self._shaper.command(w, t)
@@ -479,6 +508,132 @@ class SimulationEngine:
         self._torque_schedule.append((t, q))
         self._accepted(t)
 
+    # ----------------------------------------------------------------- trajectories
+    def command_trajectory(self, goal: TrajectoryGoal, at=None) -> None:
+        """Execute ``goal`` from its start time (or ``at``, s, its arrival); velocity drive.
+
+        It starts at the step instant nearest its start (now, if that has passed): from
+        the hub's state then, a running goal is ended (INVALID_GOAL, preempted). Points
+        whose time has already passed (a stamp in the past) are left out. Every refusal
+        is an outcome in :attr:`trajectory_outcomes`, as is the goal's end.
+        """
+        t = self._command_time(at)
+        if self.config.drive != 'velocity':
+            self._outcome(goal, INVALID_GOAL, f'the drive is {self.config.drive!r}: a '
+                          'trajectory of the hub needs the velocity drive (set drive to '
+                          "'velocity')")
+            return
+        if self.halted:
+            self._outcome(goal, INVALID_GOAL, f'the simulation is halted ({self.halted}); '
+                          'reset first')
+            return
+        start = t if goal.start_time is None else goal.start_time
+        end = start + goal.points[-1].time
+        if end < self.time:
+            self._outcome(goal, OLD_HEADER_TIMESTAMP, f'the trajectory ended at simulated '
+                          f'time {end:.6f} s, before now ({self.time:.6f} s): its header '
+                          'stamp is too old')
+            return
+        self._end_goals(INVALID_GOAL, 'preempted by a new trajectory goal')
+        self._pending_goal = goal
+        self._start_goal_if_due(self.time)
+        self.accepted_commands += 1
+
+    def cancel_trajectory(self, token) -> None:
+        """Cancel the goal with ``token`` if it is pending or executing: w holds."""
+        pending, ex = self._pending_goal, self.execution
+        if pending is not None and pending.token is token:
+            self._pending_goal = None
+            self._outcome(pending, CANCELED, 'cancelled before it started')
+        elif ex is not None and ex.goal.token is token:
+            self._finish_execution(TrajectoryOutcome(
+                token, CANCELED, f'cancelled at {self.time - ex.start:.6g} s of the '
+                f'trajectory: holding w = {float(self.state.omega):.6g} rad/s'))
+
+    def _goal_start(self, goal: TrajectoryGoal) -> float:
+        return goal.start_time if goal.start_time is not None else self.time
+
+    def _start_goal_if_due(self, t: float) -> None:
+        """Start the pending goal at step instant ``t`` (s) if its start is due by then."""
+        goal = self._pending_goal
+        if goal is None or (goal.start_time is not None
+                            and goal.start_time > t + 0.5 * self.config.dt):
+            return
+        self._pending_goal = None
+        elapsed = t - self._goal_start(goal)
+        points = goal.points
+        if elapsed > 0:                     # a stamp in the past: the points still ahead
+            points = tuple(TrajectoryPoint(p.time - elapsed, p.position, p.velocity,
+                                           p.acceleration) for p in points if p.time > elapsed)
+        cfg, state = self.config, self.state
+        omega = float(state.omega)
+        try:
+            trajectory = HubTrajectory(
+                points, HubState(float(state.theta), omega, self._omega_dot),
+                max_omega=cfg.max_omega, max_angular_acceleration=cfg.max_angular_acceleration,
+                start_tolerance=(abs(omega) * cfg.dt + 1e-9,
+                                 cfg.max_angular_acceleration * cfg.dt))
+        except TrajectoryRejected as exc:
+            self._outcome(goal, exc.code, str(exc))
+            return
+        self.execution = TrajectoryExecution(goal, trajectory, t)
+        self.timed_out_at = None
+
+    def _outcome(self, goal: TrajectoryGoal, code: str, message: str) -> None:
+        self.trajectory_outcomes.append(TrajectoryOutcome(goal.token, code, message))
+
+    def _finish_execution(self, outcome: TrajectoryOutcome) -> None:
+        """End the execution with ``outcome``: w holds where it is (the shaper's)."""
+        self.trajectory_outcomes.append(outcome)
+        self.execution = None
+        cfg = self.config
+        self._shaper = OmegaSetpointShaper(cfg.max_angular_acceleration,
+                                           delay=cfg.setpoint_delay,
+                                           omega=float(self.state.omega), time=self.time)
+        self._restart_timer()
+
+    def _end_goals(self, code: str, message: str) -> None:
+        """End the pending and the executing goal, if any, with ``code`` and ``message``."""
+        if self._pending_goal is not None:
+            self._outcome(self._pending_goal, code, message + ' (before it started)')
+            self._pending_goal = None
+        if self.execution is not None:
+            self._finish_execution(TrajectoryOutcome(self.execution.goal.token, code,
+                                                     message))
+
+    def _recheck_execution(self) -> None:
+        """After a change of limits: end the execution if it now goes beyond them."""
+        ex, cfg = self.execution, self.config
+        assert ex is not None
+        tr = ex.trajectory
+        for what, value, limit in (('|w|', tr.peak, cfg.max_omega),
+                                   ("|w'|", tr.max_angular_acceleration,
+                                    cfg.max_angular_acceleration)):
+            if value > limit * (1.0 + 1e-9):
+                self._finish_execution(TrajectoryOutcome(
+                    ex.goal.token, INVALID_GOAL, f'the limits changed: the trajectory\'s '
+                    f'{what} {value:.6g} is beyond the new limit {limit:g}'))
+                return
+
+    def tracking(self) -> Tracking | None:
+        """The executing trajectory's desired and actual hub state now (None: no goal)."""
+        ex = self.execution
+        if ex is None:
+            return None
+        s = self.state
+        return ex.tracking(self.time, float(s.theta), float(s.omega), self._omega_dot)
+
+    def _track(self, omega_dot: float) -> None:
+        """After a step: check the executing goal's tolerances; end it when it is over."""
+        ex = self.execution
+        assert ex is not None
+        if self.time < ex.end - 1e-9 * self.config.dt and not ex.checks_path:
+            return
+        s = self.state
+        outcome = ex.check(ex.tracking(self.time, float(s.theta), float(s.omega), omega_dot))
+        if outcome is not None:
+            self._finish_execution(outcome)
+
     def _accepted(self, t: float) -> None:
         """A command taking effect at time ``t`` was accepted: it restarts the timeout."""
         self._last_command = max(self._last_command, t)
@@ -494,7 +649,8 @@ class SimulationEngine:
         step instants too).
         """
         timeout = self.config.command_timeout
-        if not timeout or self.timed_out_at is not None:
+        if (not timeout or self.timed_out_at is not None or self.execution is not None
+                or self._pending_goal is not None):
             return
         deadline = self._last_command + timeout
         if self.config.drive == 'velocity':
@@ -518,9 +674,13 @@ class SimulationEngine:
         before = stepper.state
         t0 = self.time
         self._check_timeout(t0, dt)
+        if self._pending_goal is not None:
+            self._start_goal_if_due(t0)
+        ex = self.execution
         try:
             if cfg.drive == 'velocity':
-                omega_dot = (self._shaper.omega(t0 + dt) - float(before.omega)) / dt
+                target = ex.omega(t0 + dt) if ex is not None else self._shaper.omega(t0 + dt)
+                omega_dot = (target - float(before.omega)) / dt
                 state = stepper.step_velocity(omega_dot)
             else:
                 while self._torque_schedule and self._torque_schedule[0][0] <= t0 + 0.5 * dt:
@@ -528,6 +688,7 @@ class SimulationEngine:
                 state = stepper.step_torque(self.torque_command)
         except NonFiniteStateError:
             self.halted = f'non-finite state at t = {t0 + dt:.6f} s'
+            self._end_goals(PATH_TOLERANCE_VIOLATED, f'the simulation halted: {self.halted}')
             return False
         r = math.hypot(state.u, state.v)
         problem = None
@@ -542,11 +703,14 @@ class SimulationEngine:
         if problem:
             stepper.set_state(**before._asdict())
             self.halted = problem + '; halted at the last good state'
+            self._end_goals(PATH_TOLERANCE_VIOLATED, f'the simulation halted: {self.halted}')
             return False
         self._steps += 1
         self._watch_deflection(r)
         self._torque = stepper.torque
         self._omega_dot = stepper.omega_dot
+        if ex is not None:
+            self._track(self._omega_dot)
         if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
             self._shaper.forget_before(self.time)
         return True
@@ -589,6 +753,7 @@ class SimulationEngine:
         """Back to the configured initial state (clock keeps running); clears a halt."""
         self._stepper.set_state(**self.config.initial_state._asdict())
         self.halted = None
+        self._end_goals(INVALID_GOAL, 'the simulation was reset')
         self._reset_commands()
         self._reset_watch()
 
@@ -602,6 +767,7 @@ class SimulationEngine:
         """
         self._origin, self._steps = 0.0, 0
         self._stepper.time = 0.0
+        self._end_goals(INVALID_GOAL, 'the simulated time was reset')
         self._reset_commands()
         self._reset_watch()
 
@@ -624,6 +790,10 @@ class SimulationEngine:
         old = self.config
         self.config, self._stepper = config, stepper
         self._origin, self._steps = time, 0
+        if config.drive != old.drive:
+            self._end_goals(INVALID_GOAL, f'the drive changed to {config.drive!r}')
+        elif self.execution is not None:
+            self._recheck_execution()
         if (config.drive != old.drive
                 or config.max_angular_acceleration != old.max_angular_acceleration
                 or config.setpoint_delay != old.setpoint_delay):

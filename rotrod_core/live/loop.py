@@ -37,7 +37,9 @@ from dataclasses import dataclass
 from typing import Generic, NamedTuple, TypeVar
 
 import rotrod_core.live.scheduling as scheduling
+from rotrod_core.command.trajectory import INVALID_GOAL
 from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
+from rotrod_core.live.execution import Tracking, TrajectoryOutcome
 from rotrod_core.live.lockstep import (
     STEPS_CANCELLED,
     STEPS_HALTED,
@@ -80,8 +82,9 @@ SLEEP_ONLY_LATENCY = 0
 """Largest CPU wake-up latency request (us, cpu_dma_latency) under which publications
 only sleep to their due time, whatever ``publication_spin``: idle CPUs then wake at
 once, and a poll would only burn CPU."""
-COMMANDS = ('omega', 'torque')
-"""Kinds of command: an angular-velocity setpoint (rad/s) or a hub torque (N m)."""
+COMMANDS = ('omega', 'torque', 'trajectory', 'cancel_trajectory')
+"""Kinds of command: an angular-velocity setpoint (rad/s), a hub torque (N m), a
+:class:`~rotrod_core.live.execution.TrajectoryGoal`, or the token of a goal to cancel."""
 
 
 @dataclass(frozen=True)
@@ -166,6 +169,8 @@ class Sample(NamedTuple):
     frequencies: tuple
     position: tuple
     markers: bool
+    tracking: Tracking | None = None
+    """The executing trajectory's desired and actual hub state (None: no goal)."""
 
 
 class Status(NamedTuple):
@@ -224,11 +229,14 @@ class RealTimeLoop(Generic[SettingsT]):
         ready: called in the loop's thread before the run starts, every READY_WAIT s,
             until it returns true (e.g. the host's subscribers are there); simulated
             time starts then (default: at once).
+        on_trajectory: called in the loop's thread with each
+            :class:`~rotrod_core.live.execution.TrajectoryOutcome` (a trajectory goal
+            refused or ended), as soon as the engine has it.
     """
 
     def __init__(self, engine: SimulationEngine, settings: SettingsT, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
-                 running=None, inputs=None, ready=None):
+                 running=None, inputs=None, ready=None, on_trajectory=None):
         self.engine = engine
         self.settings = settings
         self._publish = publish
@@ -239,6 +247,7 @@ class RealTimeLoop(Generic[SettingsT]):
         self._running = running or (lambda: True)
         self._inputs = {kind: kind for kind in COMMANDS} | dict(inputs or {})
         self._ready = ready
+        self._on_trajectory = on_trajectory or (lambda outcome: None)
         self.lock = threading.RLock()
         """Held while the engine or the loop's state changes (re-entrant)."""
         self._stop = threading.Event()
@@ -344,9 +353,17 @@ class RealTimeLoop(Generic[SettingsT]):
         if kind not in COMMANDS:
             raise ValueError(f'command kind must be one of {COMMANDS}, got {kind!r}')
         if len(self._commands) == PENDING_COMMANDS:
-            self.dropped_commands += 1               # the deque drops the oldest
+            self.dropped_commands += 1
+            try:
+                dropped = self._commands.popleft()
+            except IndexError:                       # the loop's thread took it meanwhile
+                dropped = None
+            if dropped is not None and dropped[0] == 'trajectory':
+                self._on_trajectory(TrajectoryOutcome(
+                    dropped[1].token, INVALID_GOAL, 'dropped: commands arrive faster than '
+                    f'the simulator applies them (the oldest of {PENDING_COMMANDS} pending)'))
         self._commands.append((kind, value, self.clock.monotonic(),
-                               source or self._inputs[kind]))
+                               source or self._inputs.get(kind, kind)))
         self._command_arrived.set()
 
     def reject(self, source: str, reason: str) -> None:
@@ -395,8 +412,12 @@ class RealTimeLoop(Generic[SettingsT]):
             try:
                 if kind == 'omega':
                     engine.command_omega(value, at=at)
-                else:
+                elif kind == 'torque':
                     engine.command_torque(value, at=at)
+                elif kind == 'trajectory':
+                    engine.command_trajectory(value, at=at)
+                else:
+                    engine.cancel_trajectory(value)
             except CommandRejected as exc:
                 # throttled per source: a rejection on one must not silence another's
                 self._log('warning', f'{source} rejected: {exc}', 'rejected ' + source, 1.0)
@@ -409,12 +430,19 @@ class RealTimeLoop(Generic[SettingsT]):
                       f'{self.dropped_commands} dropped so far (the oldest of '
                       f'{PENDING_COMMANDS} pending)', 'dropped', 1.0)
             self._drops_logged = self.dropped_commands
+        self._report_outcomes()
         if self.engine.late_setpoints != self._late_logged:
             self._log('warning', f'{self.engine.late_setpoints} angular-velocity setpoints '
                       'so far arrived after their due time (the stream stalled for longer '
                       'than setpoint_delay): meanwhile w followed the stream\'s '
                       'extrapolation', 'late setpoints', 1.0)
             self._late_logged = self.engine.late_setpoints
+
+    def _report_outcomes(self) -> None:
+        """Hand the engine's trajectory outcomes to the host, oldest first."""
+        outcomes = self.engine.trajectory_outcomes
+        while outcomes:
+            self._on_trajectory(outcomes.popleft())
 
     def _log_timeout(self) -> None:
         """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""
@@ -447,6 +475,7 @@ class RealTimeLoop(Generic[SettingsT]):
             if settings.real_time_factor != old.real_time_factor:
                 self._restart_clock()
             self._countdown = min(self._countdown, self._publish_steps)
+            self._report_outcomes()
 
     def reset(self, state: bool = True, time: bool = False) -> tuple:
         """Back to the initial ``state`` (clears a halt) and/or simulated ``time`` 0.
@@ -467,6 +496,7 @@ class RealTimeLoop(Generic[SettingsT]):
             if state:
                 self.engine.reset()
             self._restart_clock()
+            self._report_outcomes()
             return was_halted, self.engine.time
 
     def pause(self, paused: bool) -> str:
@@ -647,7 +677,7 @@ class RealTimeLoop(Generic[SettingsT]):
                 self._next_marker_wall = now + 0.5 / self.settings.marker_rate
         due = self._pacer.wall_time(eng.time) if self._pacer.paced and not self.paused else None
         return Sample(due, eng.time, self._stamps.stamp(eng.time), eng.state, eng.torque,
-                      eng.frequencies(), eng.inertial_position(), markers)
+                      eng.frequencies(), eng.inertial_position(), markers, eng.tracking())
 
     def _tick(self) -> tuple[list, float | None]:
         """Integrate up to the time due now (lock held).
@@ -730,6 +760,9 @@ class RealTimeLoop(Generic[SettingsT]):
         The level is looked at most every LEVEL_CHECK wall seconds (as fast as
         possible a cycle is one publication: thousands a second).
         """
+        if self.engine.trajectory_outcomes:
+            with self.lock:
+                self._report_outcomes()
         now = self.clock.monotonic()
         if not force and now < self._next_level_check and now < self._next_status:
             return
