@@ -16,10 +16,11 @@ sourced) and from a directory outside the repository:
   ``share/rotrod/urdf/rotrod.urdf`` and the ament resource marker
   ``share/ament_index/resource_index/packages/rotrod`` exist.
 
-And the message packages: with ``rotrod_interfaces/`` and ``simulation_interfaces/``
-named as base paths too, colcon builds them (ament_cmake, with the venv's ament and
-rosidl wheels standing in for a ROS install) before ``rotrod``, and their messages
-import from the install tree.
+And the message packages: with ``rotrod_interfaces/``, ``simulation_interfaces/`` and
+``control_msgs/`` (tools/build_interfaces.py's ``PACKAGES``) named as base paths too,
+colcon builds them (ament_cmake, with the venv's ament and rosidl wheels standing in for
+a ROS install), those ``rotrod`` depends on before it, and their messages import from
+the install tree.
 """
 
 import configparser
@@ -36,6 +37,7 @@ from pathlib import Path
 
 import pytest
 import setup_py
+from interface_tools import build_interfaces
 
 pytestmark = pytest.mark.slow
 
@@ -288,10 +290,10 @@ def test_console_scripts_installed_and_run(colcon_install):
 @pytest.mark.long      # minutes (cmake and the rosidl generators): .ci/run runs it
 def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
     """``colcon build --base-paths src src/rotrod/rotrod_interfaces
-    src/rotrod/simulation_interfaces`` (docs/usage.md): the three packages, in
-    dependency order, with this venv as the ROS install (its ament and rosidl build
-    wheels, cmake and ninja, as tools/build_interfaces.py sets them up); the installed
-    messages import from the install tree and serialize."""
+    src/rotrod/simulation_interfaces src/rotrod/control_msgs`` (docs/usage.md): the four
+    packages, those rotrod depends on before it, with this venv as the ROS install (its
+    ament and rosidl build wheels, cmake and ninja, as tools/build_interfaces.py sets
+    them up); the installed messages import from the install tree and serialize."""
     ws = tmp_path / 'ws'
     src = ws / 'src' / PACKAGE
     for rel in source_files():
@@ -301,9 +303,9 @@ def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
     env = dict(os.environ, COLCON_HOME=str(tmp_path / 'colcon_home'),
                PATH=f'{venv / "bin"}{os.pathsep}{os.environ.get("PATH", "")}',
                AMENT_PREFIX_PATH=str(venv), CMAKE_PREFIX_PATH=str(venv))
+    interfaces = list(build_interfaces.PACKAGES)
     cmd = [str(venv / 'bin' / 'colcon'), '--log-base', str(ws / 'log'), 'build',
-           '--base-paths', 'src', f'src/{PACKAGE}/rotrod_interfaces',
-           f'src/{PACKAGE}/simulation_interfaces',
+           '--base-paths', 'src', *(f'src/{PACKAGE}/{name}' for name in interfaces),
            '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
            '--cmake-args', '-G', 'Ninja', f'-DPython3_EXECUTABLE={sys.executable}',
            '-DBUILD_TESTING=OFF']
@@ -312,21 +314,39 @@ def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
     output = proc.stdout + proc.stderr
     assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
     order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', output)]
-    assert sorted(order[:2]) == ['rotrod_interfaces', 'simulation_interfaces']
-    assert order[2:] == [PACKAGE]                                   # rotrod depends on both
-    site, out = _run_from_install(ws / 'install' / 'rotrod_interfaces', tmp_path, (
+    assert sorted(order) == sorted([*interfaces, PACKAGE])
+    depends = set(re.findall(r'<\w*depend>(\w+)</', (ROOT / 'package.xml').read_text()))
+    assert {'rotrod_interfaces', 'simulation_interfaces'} <= depends
+    for name in depends.intersection(interfaces):
+        assert order.index(name) < order.index(PACKAGE), (name, order)
+    assert sorted(INSTALLED_PROBES) == sorted(interfaces)
+    for name, (code, expected) in INSTALLED_PROBES.items():
+        site, out = _run_from_install(ws / 'install' / name, tmp_path, code)
+        first, second = out.split()
+        assert first.startswith(str(site)) and second == expected, name
+
+
+INSTALLED_PROBES = {
+    'rotrod_interfaces': (
         'import rotrod_interfaces.msg as m, rotrod_interfaces.action as a\n'
         'from rclpy.serialization import serialize_message as s\n'
-        'print(m.__file__); s(m.WhirlEstimate(f1=1.5)); print(a.SpinUp.Goal.PLANNED)'))
-    first, second = out.split()
-    assert first.startswith(str(site)) and second == 'planned'
-    site, out = _run_from_install(ws / 'install' / 'simulation_interfaces', tmp_path, (
+        'print(m.__file__); s(m.WhirlEstimate(f1=1.5)); print(a.SpinUp.Goal.PLANNED)',
+        'planned'),
+    'simulation_interfaces': (
         'import simulation_interfaces.srv as s\n'
         'from rclpy.serialization import serialize_message as m\n'
         'print(s.__file__); m(s.StepSimulation.Request(steps=3)); '
-        'print(s.ResetSimulation.Request.SCOPE_ALL)'))
-    first, second = out.split()
-    assert first.startswith(str(site)) and second == '255'
+        'print(s.ResetSimulation.Request.SCOPE_ALL)',
+        '255'),
+    'control_msgs': (
+        'import control_msgs.action as a\n'
+        'from rclpy.serialization import serialize_message as m\n'
+        'print(a.__file__); m(a.FollowJointTrajectory.Goal(path_tolerance=[])); '
+        'print(a.FollowJointTrajectory.Result.GOAL_TOLERANCE_VIOLATED)',
+        '-5'),
+}
+"""Per interface package: code run with only its colcon install added (it prints the
+module's file, then a value), and the value it must print."""
 
 
 def _run_from_install(prefix: Path, cwd: Path, code: str) -> tuple[Path, str]:
