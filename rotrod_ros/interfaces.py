@@ -41,6 +41,9 @@ class Interface:
     (see :func:`create`). Reliable and KEEP_ALL on both sides, nothing is dropped: a
     subscriber that falls behind stops acknowledging, and the publisher's publish
     blocks (rmw_fastrtps: 100 ms, then fails) until it catches up."""
+    transient_local: bool = False
+    """Durability transient local: a subscriber that comes later still gets the last
+    ``depth`` messages (a description, as robot_state_publisher's robot_description)."""
 
     def __post_init__(self):
         if self.kind not in (PUBLISHER, SUBSCRIPTION, SERVICE, ACTION, CLIENT, ACTION_CLIENT):
@@ -54,15 +57,16 @@ class Interface:
 
 
 def pub(name: str, msg_type: type, description: str, depth: int = 10,
-        keep_all: str = '') -> Interface:
+        keep_all: str = '', transient_local: bool = False) -> Interface:
     """A topic the node publishes."""
-    return Interface(PUBLISHER, name, msg_type, description, depth, keep_all)
+    return Interface(PUBLISHER, name, msg_type, description, depth, keep_all, transient_local)
 
 
 def sub(name: str, msg_type: type, description: str, depth: int = 10,
-        keep_all: str = '') -> Interface:
+        keep_all: str = '', transient_local: bool = False) -> Interface:
     """A topic the node subscribes to."""
-    return Interface(SUBSCRIPTION, name, msg_type, description, depth, keep_all)
+    return Interface(SUBSCRIPTION, name, msg_type, description, depth, keep_all,
+                     transient_local)
 
 
 def srv(name: str, srv_type: type, description: str) -> Interface:
@@ -89,9 +93,12 @@ def qos(interface: Interface, conditions=()):
     """The topic's QoS (reliable, volatile), or its depth for rclpy's default.
 
     KEEP_ALL history if its ``keep_all`` is ALWAYS or in ``conditions``, else the last
-    ``depth`` messages.
+    ``depth`` messages; transient local if the interface says so.
     """
-    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+    if interface.transient_local:
+        return QoSProfile(depth=interface.depth, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
     if interface.keep_all and (interface.keep_all == ALWAYS
                                or interface.keep_all in conditions):
         return QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=interface.depth,

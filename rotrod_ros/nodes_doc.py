@@ -59,6 +59,8 @@ def node_section(executable: str, module, specs, read_only: bool | None) -> list
         if i.keep_all:
             qos = (' (QoS KEEP_ALL)' if i.keep_all == ALWAYS else
                    f' (QoS KEEP_ALL {i.keep_all}, else depth {i.depth})')
+        if i.transient_local:
+            qos = f' (QoS transient local, depth {i.depth})'
         lines.append(f'| {KINDS[i.kind]} `{i.name}` | {i.type_name} | '
                      f'{_cell(i.description)}{qos} |')
     lines += ['', '| parameter | type | default | unit | range | at run time | description |',

@@ -28,7 +28,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
+from std_msgs.msg import Float64, String
 from std_srvs.srv import SetBool, Trigger
 
 import rotrod_core.live.scheduling as scheduling
@@ -40,8 +40,16 @@ from rotrod_core.live.publication import SAMPLE_TOPICS
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
 from rotrod_core.model.scene import scene
+from rotrod_core.model.urdf import urdf_text
 
-from . import interfaces, messages, node_main, parameter_specs, simulation_control
+from . import (
+    interfaces,
+    messages,
+    node_main,
+    parameter_specs,
+    simulation_control,
+    trajectory_server,
+)
 from .interfaces import pub, srv, sub
 from .keep_all import KeepAllPublishing
 from .node_main import ConfigurationError
@@ -139,6 +147,11 @@ INTERFACES = (
         'key values'),
     pub('/clock', Clock, 'simulated time, when real_time_factor != 1 or start_paused; '
         'with each publication, also when stepped'),
+    pub('robot_description', String, 'the URDF of the rod (rotrod urdf) with its physical '
+        'parameters and the drive\'s limits in a <rotrod> element, from the parameters in '
+        'use: published at start and after every parameter change; what the other nodes '
+        'read the rod from', 1, transient_local=True),
+    *trajectory_server.INTERFACES,
     *simulation_control.INTERFACES,
     srv('~/reset', Trigger, 'back to the initial state, the simulated time going on; clears '
         'a halt (kept alias of ~/reset_simulation with SCOPE_STATE)'),
@@ -174,7 +187,10 @@ class SimulatorNode(Node):
             logger=self.get_logger(), running=self.context.ok,
             inputs={'omega': 'cmd/omega or joint_command',
                     'torque': 'cmd/torque or joint_command'},
-            ready=self._subscribers_ready if settings.subscriber_wait()[0] else None)
+            ready=self._subscribers_ready if settings.subscriber_wait()[0] else None,
+            on_trajectory=lambda outcome: self._trajectories.on_outcome(outcome))
+        self._trajectories: trajectory_server.TrajectoryServer = \
+            trajectory_server.TrajectoryServer(self, self.loop)
         self._wait_deadline: float | None = None
         submit = self.loop.submit
         self._control = control = simulation_control.SimulationControl(
@@ -188,7 +204,8 @@ class SimulatorNode(Node):
             'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
             'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
             'joint_command': self._on_joint_command,
-            '~/reset': self._on_reset, '~/pause': self._on_pause, **control_callbacks},
+            '~/reset': self._on_reset, '~/pause': self._on_pause, **control_callbacks,
+            **self._trajectories.callbacks()},
             conditions={LOSSLESS} if self.lossless else (),
             callback_groups={i.name: group for i in simulation_control.INTERFACES})
         # paced, a held-up publication is dropped; as fast as possible, the physics waits
@@ -197,6 +214,8 @@ class SimulatorNode(Node):
                                            lambda: self.loop.running, STOP_GRACE)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        self._description: str | None = None
+        self._publish_description()
 
     @property
     def engine(self) -> SimulationEngine:
@@ -230,6 +249,20 @@ class SimulatorNode(Node):
             self._observation.reconfigure(old, settings)
         changed = ', '.join(f'{p.name}={p.value!r}' for p in params)
         self.get_logger().info(f'parameters changed: {changed}')
+        self._publish_description()
+
+    def description(self) -> str:
+        """The URDF of the rod in use, with its <rotrod> description."""
+        config = self.engine.config
+        return urdf_text(config.params, limits=config.drive_limits,
+                         disk_radius=self.settings.disk_radius)
+
+    def _publish_description(self) -> None:
+        """robot_description: the URDF of the parameters in use (if it changed)."""
+        text = self.description()
+        if text != self._description:
+            self._description = text
+            self._io['robot_description'].publish(String(data=text))
 
     def _waited_topics(self) -> list[str]:
         return [t for t in SAMPLE_TOPICS
@@ -348,6 +381,7 @@ class SimulatorNode(Node):
         send('tip/position', messages.set_position(m.position, stamp, s.position), wait)
         send('frequencies', messages.set_frequencies(m.frequencies, stamp, float(st.omega),
                                                      *s.frequencies), wait)
+        self._trajectories.feedback(stamp, s.tracking)
         io = self._io
         if settings.publishes_clock:
             io['/clock'].publish(messages.clock(stamp))

@@ -138,7 +138,7 @@ def hub_points(joint_names: Sequence[str], points: Sequence[tuple]) -> tuple[Tra
         raise _invalid('the trajectory has no points')
     n = len(joint_names)
     given = None
-    out = []
+    out: list[TrajectoryPoint] = []
     for k, (time, *arrays) in enumerate(points):
         sizes = [len(a) for a in arrays]
         for name, size in zip((*FIELDS, 'effort'), sizes):
@@ -218,7 +218,7 @@ class HubTrajectory(Profile):
         self.order = 1 + (first.velocity is not None) * (1 + (first.acceleration is not None))
         """Derivatives matched at each point: 1 (values), 2 (and slopes) or 3."""
         self.position_offset = 0.0
-        if self.by_position:
+        if first.position is not None:
             # continuous joint: the hub's angle within pi of the first point's
             shift = first.position + _wrapped(start.position - first.position) - start.position
             self.position_offset = shift
@@ -234,7 +234,10 @@ class HubTrajectory(Profile):
         self._omega = self._theta.derivative()
         self._omega_dot = self._omega.derivative()
         self._check_limits(max_omega, max_angular_acceleration)
-        self.final_velocity = float(self._omega(self.end_time))
+        last = self.points[-1]
+        # the last point's speed itself where it is given (held exactly after the end)
+        self.final_velocity = (float(self._omega(self.end_time)) if last.velocity is None
+                               else last.velocity)
         self.final_position = float(self._theta(self.end_time))
         self._breaks = [float(x) for x in self._omega.x]
         self._segments = [[float(c) for c in column] for column in self._omega.c.T]

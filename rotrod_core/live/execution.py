@@ -130,6 +130,8 @@ class Tracking(NamedTuple):
     """Time from the trajectory's start, s."""
     desired: HubState
     actual: HubState
+    token: Any = None
+    """The goal's host token."""
 
     @property
     def error(self) -> HubState:
@@ -166,7 +168,7 @@ class TrajectoryExecution:
         desired = HubState(float(tr.position(tau)), float(tr.omega(tau)),
                            float(tr.omega_dot(tau)))
         actual = HubState(position + tr.position_offset, velocity, acceleration)
-        return Tracking(tau, desired, actual)
+        return Tracking(tau, desired, actual, self.goal.token)
 
     def check(self, tracking: Tracking) -> TrajectoryOutcome | None:
         """The outcome at this instant, if the goal ends here (None: it goes on)."""

@@ -329,6 +329,10 @@ class RealTimeLoop(Generic[SettingsT]):
     def _marker_every(self) -> int:
         return max(1, round(self.settings.publish_rate / self.settings.marker_rate))
 
+    def simulated_time(self, stamp: float) -> float:
+        """The simulated time (s) that stamps as ``stamp`` (s): :meth:`stamp_now`'s inverse."""
+        return stamp - self._stamps.origin
+
     def stamp_now(self) -> float:
         """The stamp time of the current simulated time, s (lock held)."""
         return self._stamps.stamp(self.engine.time)
@@ -342,13 +346,16 @@ class RealTimeLoop(Generic[SettingsT]):
             self._stamps.follow_wall(self.engine.time, self.clock.epoch())
 
     # ----------------------------------------------------------------- commands
-    def submit(self, kind: str, value: float, source: str | None = None) -> None:
+    def submit(self, kind: str, value, source: str | None = None) -> None:
         """Queue a command (any thread; O(1)), stamped with its arrival time.
 
-        ``kind`` is 'omega' (rad/s) or 'torque' (N m); ``source`` names where it came
-        from in log lines (default: the kind's input, see ``inputs``). The loop's
-        thread applies it at the simulated instant it arrived; the oldest of
-        PENDING_COMMANDS pending is dropped (and counted) when a sender outpaces it.
+        ``kind`` is one of :data:`COMMANDS`: 'omega' (``value`` rad/s), 'torque' (N m),
+        'trajectory' (a TrajectoryGoal, started at its stamp or its arrival) or
+        'cancel_trajectory' (a goal's token); ``source`` names where it came from in log
+        lines (default: the kind's input, see ``inputs``). The loop's thread applies it
+        at the simulated instant it arrived; the oldest of PENDING_COMMANDS pending is
+        dropped (and counted) when a sender outpaces it (a goal dropped so ends with
+        INVALID_GOAL).
         """
         if kind not in COMMANDS:
             raise ValueError(f'command kind must be one of {COMMANDS}, got {kind!r}')
