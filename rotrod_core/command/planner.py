@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import BSpline
+from scipy.linalg import solve_triangular
 from scipy.optimize import nnls
 
 import rotrod_core.model.propagation as propagation
@@ -38,7 +39,7 @@ from rotrod_core.command.profiles import SpinUpProfile, spin_up_knots
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import finite_number
-from rotrod_core.numerics.expm import expm_batch
+from rotrod_core.numerics.expm import expm_batch_grouped
 
 STEPS_PER_KNOT = 6
 """Magnus steps per knot interval while optimising (4x more for the final check)."""
@@ -77,8 +78,12 @@ MINIMAX_ITERATIONS = 200
 CLEARLY_FEASIBLE = 0.99
 """A minimax solve stops once M is this far below 1: the duration is feasible whatever
 the rest of the iteration would do. The plan's own solve runs to convergence."""
-MINIMAX_TOLERANCE = 1e-9
-"""A minimax solve stops when a step predicts less decrease than this (relative)."""
+MINIMAX_TOLERANCE = 1e-6
+"""A minimax solve stops when a step predicts less decrease than this (relative): M is
+then within ~1e-5 of where the iteration goes, far inside the margins by which the
+durations visited are decided (the closest seen, 3e-4). Below it the iteration creeps
+(linear convergence at a damping that no longer shrinks) for up to MINIMAX_ITERATIONS
+steps, which was most of the planning time at 1e-9."""
 DAMPING = 1e-3
 """First Levenberg-Marquardt damping of a minimax solve (ratios scaled to 1, per unit of
 the free control points squared)."""
@@ -92,7 +97,6 @@ class _Sample:
     start: np.ndarray       # (u, v, u', v', 1) at omega_start, at rest about its static
     target: np.ndarray      # (u, v, u', v') static at omega_target
     rows: np.ndarray        # complex (n, 4): residual = sum |rows @ (x - target)|
-    parts: tuple            # propagation.derivative_parts(co): dA/dw, dA/dw' of this rod
 
 
 def _coefficients(params: RodParams, scale: float) -> Coefficients:
@@ -104,16 +108,29 @@ def _coefficients(params: RodParams, scale: float) -> Coefficients:
                                                    * scale * scale))
 
 
-def _stacked(samples) -> tuple[Coefficients, tuple]:
-    """The samples' coefficients as arrays of shape (B, 1), and their derivative parts.
+class _Batch:
+    """Samples as the kernel takes them, built once per problem (B samples).
 
-    One row per sample; the parts (:func:`~rotrod_core.model.propagation.derivative_parts`,
-    each sample's own, evaluated once in :func:`_sample`) stacked to (B, 1, 5, 5).
+    ``co``: coefficients, arrays (B,); ``basis``: the matrices whose combinations are
+    every step's Magnus exponent and its derivatives
+    (:func:`~rotrod_core.model.propagation.magnus4_basis`), (B, 10, 5, 5);
+    ``starts``: start states (B, 5). ``balanced``: the basis of a quarter step's
+    exponent in the coordinates (u, v, u' / s, v' / s, 1), s the power of 2 nearest the
+    highest natural frequency (rad/s). There the exponent's norm is about h (w0 + 2 |w|)
+    instead of h w0^2, so that its exponential needs no squarings; ``unbalance``
+    multiplies that exponential back, exactly (powers of 2).
     """
-    co = Coefficients(**{k: np.array([float(getattr(s.co, k)) for s in samples])[:, None]
-                         for k in vars(samples[0].co)})
-    parts = tuple(np.stack([s.parts[i] for s in samples])[:, None] for i in range(3))
-    return co, parts
+
+    def __init__(self, samples):
+        self.co = Coefficients(**{k: np.array([float(getattr(s.co, k)) for s in samples])
+                                  for k in vars(samples[0].co)})
+        self.basis = propagation.magnus4_basis(propagation.system_features(self.co))
+        self.starts = np.array([s.start for s in samples])
+        fastest = math.sqrt(max(np.max(self.co.w1sq), np.max(self.co.w2sq)))
+        s = 2.0 ** round(math.log2(fastest)) if fastest > 0 else 1.0
+        scale = np.array([1.0, 1.0, s, s, 1.0])
+        self.balanced = 0.25 * self.basis * (scale[None, :] / scale[:, None])
+        self.unbalance = scale[:, None] / scale[None, :]
 
 
 def _free_matrix(co: Coefficients, omega: float) -> np.ndarray:
@@ -133,8 +150,7 @@ def _sample(params: RodParams, scale: float, omega_start: float,
                              f'frequencies x {scale:g}): no residual-free arrival or start '
                              'exists there')
         states.append(np.linalg.solve(A[:4, :4], -A[:4, 4]))
-    return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target),
-                   propagation.derivative_parts(co))
+    return _Sample(co, np.r_[states[0], 1.0], states[1], _residual_rows(co, omega_target))
 
 
 def _residual_rows(co: Coefficients, omega: float) -> np.ndarray:
@@ -212,41 +228,50 @@ class _Grid:
         self.w2, self.d2 = _basis(n_free, self.x2)
 
 
-def _propagate(samples, grid: _Grid, T: float, c: np.ndarray, free=None):
-    """States on the grid nodes for every sample, shape (B, N + 1, 5).
+class _Run:
+    """One shape propagated over the grid for every sample of a batch (B samples, N steps).
 
-    With ``free``, also their derivatives with respect to those control points and
-    to T, shape (B, N + 1, 5, len(free) + 1). The system, its Magnus exponent, their
-    derivatives and the chains are the kernel's (:mod:`rotrod_core.model.propagation`).
+    ``X`` (B, N + 1, 5): the states on the grid nodes. Kept for the derivatives
+    (:func:`_sensitivities`): the speeds ``w1``, ``w2`` (rad/s) and accelerations
+    ``wd1``, ``wd2`` (rad/s^2) at the two Gauss points of every step, (N,), and the
+    exponentials of a quarter step and of the step, ``quarter`` and ``phi`` (B, N, 5, 5).
+    The Magnus exponent and the chain are the kernel's
+    (:mod:`rotrod_core.model.propagation`).
     """
-    co, parts = _stacked(samples)
-    h = T / grid.n
-    w1, wd1 = grid.w1 @ c, grid.d1 @ c / T
-    w2, wd2 = grid.w2 @ c, grid.d2 @ c / T
-    A1 = propagation.system_matrix(co, w1, wd1)
-    A2 = propagation.system_matrix(co, w2, wd2)
-    omega = propagation.magnus4(h, A1, A2)
-    quarter = expm_batch(0.25 * omega)
-    half = quarter @ quarter
-    phi = half @ half
-    X = propagation.affine_chain(phi, np.array([s.start for s in samples]))
-    if free is None:
-        return X, None
-    # d(Omega)/dp for p = w(t1), w'(t1), w(t2), w'(t2), and T at fixed speeds
-    dw1, da1 = propagation.system_matrix_derivatives(co, w1, wd1, parts)
-    dw2, da2 = propagation.system_matrix_derivatives(co, w2, wd2, parts)
-    E = np.stack([propagation.magnus4_derivative(h, A1, A2, dw1, 0.0),
-                  propagation.magnus4_derivative(h, A1, A2, da1, 0.0),
-                  propagation.magnus4_derivative(h, A1, A2, 0.0, dw2),
-                  propagation.magnus4_derivative(h, A1, A2, 0.0, da2),
-                  propagation.magnus4_step_derivative(h, A1, A2) * (h / T)])
-    dx = propagation.frechet_boole(quarter, E, X[:, :-1])
-    z = np.zeros((grid.n, 1))
-    dp = np.stack([np.c_[grid.w1[:, free], z], np.c_[grid.d1[:, free] / T, -wd1[:, None] / T],
-                   np.c_[grid.w2[:, free], z], np.c_[grid.d2[:, free] / T, -wd2[:, None] / T],
-                   np.c_[np.zeros((grid.n, len(free))), z + 1]])
-    D = np.moveaxis(dx, 0, -1) @ np.moveaxis(dp, 0, 1)        # (B, N, 5, P) @ (N, P, k)
-    return X, propagation.sensitivity_chain(phi, D)
+
+    def __init__(self, batch: _Batch, grid: _Grid, T: float, c: np.ndarray):
+        self.T, self.h = T, T / grid.n
+        self.w1, self.wd1 = grid.w1 @ c, grid.d1 @ c / T
+        self.w2, self.wd2 = grid.w2 @ c, grid.d2 @ c / T
+        coefficients = propagation.magnus4_coefficients(self.h, self.w1, self.wd1, self.w2,
+                                                        self.wd2)
+        balanced = propagation.magnus4_combination(coefficients, batch.balanced)
+        self.quarter = expm_batch_grouped(balanced) * batch.unbalance
+        half = self.quarter @ self.quarter
+        self.phi = half @ half
+        self.X = propagation.affine_chain(self.phi, batch.starts)
+
+
+def _propagate(samples, grid: _Grid, T: float, c: np.ndarray) -> tuple[np.ndarray, _Run]:
+    """States on the grid nodes for every sample, shape (B, N + 1, 5), and the run."""
+    run = _Run(_Batch(samples), grid, T, c)
+    return run.X, run
+
+
+def _sensitivities(run: _Run, batch: _Batch, shape_derivatives: np.ndarray) -> np.ndarray:
+    """d(state)/d(control points) on every node, shape (B, N + 1, 5, k).
+
+    ``shape_derivatives`` (N, 4, k): d(w, w' at the two Gauss points of each step)/
+    d(the k control points). Per step, the derivatives of its Magnus exponent by w and
+    w' at its Gauss points, the Frechet derivative of the step's exponential along
+    them, and the forward sensitivity chain: all the kernel's.
+    """
+    coefficients = propagation.magnus4_coefficients(run.h, run.w1, run.wd1, run.w2, run.wd2,
+                                                    derivatives=True)[:, 1:]
+    E = propagation.magnus4_combination(coefficients, batch.basis)     # (B, N, 4, 5, 5)
+    dx = propagation.frechet_boole(run.quarter, np.moveaxis(E, -3, 0), run.X[:, :-1])
+    D = np.moveaxis(dx, 0, -1) @ shape_derivatives             # (B, N, 5, 4) @ (N, 4, k)
+    return propagation.sensitivity_chain(run.phi, D)
 
 
 def _residuals(samples, X) -> np.ndarray:
@@ -268,12 +293,14 @@ class _Problem:
         self.free = np.arange(2, n_free + 2)
         self.scales = list(scales)
         self.samples = [_sample(params, s, omega_start, omega_target) for s in self.scales]
+        self.batch = _Batch(self.samples)
         self.steps = steps
         self.grid = _Grid(n_free, steps)
         # whirl components that are not identically zero (a round rod without damping
         # whirls in circles: one of each pair's two components vanishes)
-        self.rows = [s.rows[np.linalg.norm(s.rows, axis=1) > 1e-9 * np.linalg.norm(s.rows)]
-                     for s in self.samples]
+        self.whirl = _Whirl([s.rows[np.linalg.norm(s.rows, axis=1)
+                                    > 1e-9 * np.linalg.norm(s.rows)] for s in self.samples],
+                            [s.target for s in self.samples])
         lo, hi = sorted((omega_start, omega_target))
         cap = _speed_cap(params, max(self.scales[0], min(self.scales)))
         lo, hi = max(lo - SHAPE_BOUND * (hi - lo), 0.0), min(hi + SHAPE_BOUND * (hi - lo),
@@ -290,7 +317,10 @@ class _Problem:
             self.diff[i, i], self.diff[i, i + 1] = -f, f
 
     def control_points(self, y) -> np.ndarray:
-        return np.r_[self.ws, self.ws, self.ws + self.dw * np.asarray(y), self.wf, self.wf]
+        """The control points (rad/s) of the free points y (normalised by the change)."""
+        c = np.empty(self.n_free + 4)
+        c[:2], c[2:-2], c[-2:] = self.ws, self.ws + self.dw * np.asarray(y), self.wf
+        return c
 
     def initial_shape(self) -> np.ndarray:
         """Free control points of the shape x - sin(2 pi x) / 2 pi (Eq. 26's spin-up)."""
@@ -409,8 +439,13 @@ class _Limits:
 
     def __init__(self, problem: _Problem, T: float):
         self.problem, self.T = problem, T
+        self._last: tuple[np.ndarray, _Run] | None = None
         self.aim = problem.residual * (1 - RESIDUAL_MARGIN)
         self.d2 = (problem.limit * (1 - LIMIT_MARGIN)) ** 2
+        grid, free = problem.grid, problem.free
+        # d(w, w' at the Gauss points)/d(control points): (N, 4, len(free)), per rad/s
+        self.shape_derivatives = np.stack([grid.w1[:, free], grid.d1[:, free] / T,
+                                           grid.w2[:, free], grid.d2[:, free] / T], axis=1)
         self.acc_matrix = self.acc_bound = None
         if problem.max_acc is not None:
             # w' = (diff @ c) / T, linear in y: |w'| <= max_acc as A y <= b
@@ -418,13 +453,23 @@ class _Limits:
             a0 = problem.diff @ problem.control_points(np.zeros(problem.n_free)) / T
             self.acc_matrix, self.acc_bound = np.r_[A, -A], problem.max_acc - np.r_[a0, -a0]
 
-    def values(self, y) -> np.ndarray:
+    def run(self, y) -> _Run:
+        """The propagation of the shape y, kept for the next call.
+
+        The model of a step just tried (:meth:`values`, then :meth:`model` when the step
+        is taken) propagates it once.
+        """
         p = self.problem
-        X, _ = _propagate(p.samples, p.grid, self.T, p.control_points(y))
-        res = [len(rows) * np.sum(np.abs(rows @ (X[b, -1, :4] - s.target)) ** 2)
-               for b, (s, rows) in enumerate(zip(p.samples, p.rows))]
+        c = p.control_points(y)
+        if self._last is None or not np.array_equal(self._last[0], c):
+            self._last = (c, _Run(p.batch, p.grid, self.T, c))
+        return self._last[1]
+
+    def values(self, y) -> np.ndarray:
+        X = self.run(y).X
+        whirl = self.problem.whirl.components(X[:, -1, :4]) / self.aim
         r2 = X[0, 1:, 0] ** 2 + X[0, 1:, 1] ** 2
-        return np.r_[np.array(res) / self.aim**2, r2 / self.d2]
+        return np.concatenate([self.problem.whirl.squared(whirl), r2 / self.d2])
 
     def model(self, y) -> tuple[np.ndarray, np.ndarray, list]:
         """(values, gradients (k, n), Gauss-Newton curvature factors) of every ratio at y.
@@ -435,21 +480,46 @@ class _Limits:
         kernel's sensitivities.
         """
         p = self.problem
-        X, S = _propagate(p.samples, p.grid, self.T, p.control_points(y), p.free)
-        S = S[..., :-1] * p.dw
-        values, gradients, factors = [], [], []
-        for b, (s, rows) in enumerate(zip(p.samples, p.rows)):
-            m = len(rows)
-            a = rows @ (X[b, -1, :4] - s.target) / self.aim
-            J = rows @ S[b, -1, :4] / self.aim
-            values.append(m * np.sum(np.abs(a) ** 2))
-            gradients.append(2 * m * (np.conj(a)[:, None] * J).real.sum(axis=0))
-            factors.append(math.sqrt(2 * m) * np.r_[J.real, J.imag])
-        u, v, Ju, Jv = X[0, 1:, 0], X[0, 1:, 1], S[0, 1:, 0], S[0, 1:, 1]
-        values = np.r_[values, (u * u + v * v) / self.d2]
-        gradients = np.r_[np.array(gradients), 2 * (u[:, None] * Ju + v[:, None] * Jv) / self.d2]
+        run = self.run(y)
+        X = run.X
+        S = _sensitivities(run, p.batch, self.shape_derivatives)
+        whirl = p.whirl
+        a = whirl.components(X[:, -1, :4]) / self.aim          # (B, m)
+        J = whirl.rows @ (S[:, -1, :4] * (p.dw / self.aim))    # (B, m, n)
+        gradients = 2 * whirl.count[:, None] * np.einsum('bm,bmn->bn', np.conj(a), J).real
+        factors = [math.sqrt(2 * m) * np.concatenate([Jb[:m].real, Jb[:m].imag])
+                   for m, Jb in zip(whirl.count, J)]
+        u, v = X[0, 1:, 0], X[0, 1:, 1]
+        Ju, Jv = S[0, 1:, 0] * p.dw, S[0, 1:, 1] * p.dw
+        values = np.concatenate([whirl.squared(a), (u * u + v * v) / self.d2])
+        gradients = np.concatenate([gradients,
+                                    2 * (u[:, None] * Ju + v[:, None] * Jv) / self.d2])
         factors.append(math.sqrt(2 / self.d2) * np.stack([Ju, Jv], axis=1))    # (N, 2, n)
         return values, gradients, factors
+
+
+class _Whirl:
+    """The whirl components of every band sample, padded to one array.
+
+    ``rows`` (B, m, 4) complex, each sample's rows (:func:`_residual_rows`, the
+    identically zero ones left out) then zero rows; ``count`` (B,) how many are its
+    own; ``targets`` (B, 4): the static states at the target speed (m, m/s).
+    """
+
+    def __init__(self, rows: list, targets: list):
+        self.count = np.array([len(r) for r in rows])
+        self.rows = np.zeros((len(rows), int(self.count.max()), 4), dtype=complex)
+        for b, r in enumerate(rows):
+            self.rows[b, :len(r)] = r
+        self.targets = np.array(targets)
+
+    def components(self, ends: np.ndarray) -> np.ndarray:
+        """The whirl components (m, complex) of the end states ``ends`` (B, 4): (B, m)."""
+        return np.einsum('bmi,bi->bm', self.rows, ends - self.targets)
+
+    def squared(self, components: np.ndarray) -> np.ndarray:
+        """m_b sum_j |a_bj|^2 for every sample b (Cauchy-Schwarz: >= (sum_j |a_bj|)^2)."""
+        return self.count * np.sum(components.real ** 2 + components.imag ** 2, axis=1)
 
 
 def _hessian(weights: np.ndarray, factors: list) -> np.ndarray:
@@ -478,9 +548,11 @@ def _minimax_step(g, G, H, damping, L, rhs):
     Q = np.zeros((n + 1, n + 1))
     Q[:n, :n] = (H + damping * np.eye(n)) / m
     Q[n, n] = 1e-2                              # strictly convex in t as well
-    A = np.r_[np.c_[G / m, -np.ones(len(g))], np.c_[L, np.zeros(len(L))]]
-    b = np.r_[-g / m, rhs]
-    out = _quadratic_program(Q, np.r_[np.zeros(n), 1.0], A, b)
+    A = np.zeros((len(g) + len(L), n + 1))
+    A[:len(g), :n], A[:len(g), n], A[len(g):, :n] = G / m, -1.0, L
+    q = np.zeros(n + 1)
+    q[n] = 1.0
+    out = _quadratic_program(Q, q, A, np.concatenate([-g / m, rhs]))
     if out is None:
         return None
     x, multipliers = out
@@ -499,17 +571,17 @@ def _quadratic_program(Q, q, A, b):
     Q = L L^T and u = L^T x + L^-1 q, minimise |u| subject to G u >= h.
     """
     L = np.linalg.cholesky(Q)
-    Lq = np.linalg.solve(L, q)
-    AL = np.linalg.solve(L, A.T).T             # A L^-T
+    Lq = solve_triangular(L, q, lower=True)
+    AL = solve_triangular(L, A.T, lower=True).T          # A L^-T
     G, h = -AL, -(b + AL @ Lq)
-    E = np.r_[G.T, h[None, :]]
+    E = np.concatenate([G.T, h[None, :]])
     f = np.zeros(len(q) + 1)
     f[-1] = 1.0
     lam = nnls(E, f, maxiter=50 * E.shape[1])[0]
     r = E @ lam - f
     if abs(r[-1]) < 1e-12:
         return None
-    x = np.linalg.solve(L.T, -r[:-1] / r[-1] - Lq)
+    x = solve_triangular(L, -r[:-1] / r[-1] - Lq, lower=True, trans='T')
     return x, lam / (1.0 - h @ lam)
 
 

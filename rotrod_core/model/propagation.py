@@ -20,7 +20,10 @@ and rig identification (the live RK4 stepper evaluates the same
   :func:`magnus6` (three Gauss points, Blanes, Casas & Ros 2000) for real matrices,
   :func:`magnus4_complex` and :func:`magnus6_complex_features` for complex affine
   tuples, and the derivatives of the fourth-order exponent (:func:`magnus4_derivative`,
-  :func:`magnus4_step_derivative`).
+  :func:`magnus4_step_derivative`). The same exponent and its derivatives by w and w'
+  as combinations of ten matrices per system (:func:`system_features`,
+  :func:`magnus4_basis`, :func:`magnus4_coefficients`, :func:`magnus4_combination`):
+  one matrix product per system for all the steps of a profile (the planner's).
 - Chains: :func:`affine_chain` (states x_k of x_{k+1} = phi_k x_k, blocked products),
   :func:`frechet_boole` (the derivative of a step's exponential applied to the
   state) and :func:`sensitivity_chain` (forward sensitivities along the chain).
@@ -209,6 +212,80 @@ def magnus4_step_derivative(h, A1, A2) -> np.ndarray:
     """d(:func:`magnus4`)/dh with the matrices held fixed: (A1 + A2)/2 + 2 c h [A2, A1]."""
     hh = np.asarray(h, dtype=float)[..., None, None]
     return 0.5 * (A1 + A2) + 2.0 * _C4 * hh * _commutator(A2, A1)
+
+
+def system_features(co: Coefficients) -> tuple:
+    """:func:`system_matrix` as F0 + w Fw + w^2 Fw2 + w' Fwd: the matrices (F0, Fw, Fw2, Fwd).
+
+    The equations are a polynomial of degree 2 in w and 1 in w' (:func:`derivative_parts`):
+    F0 is the system at rest, Fw = D(0), Fw2 = (D(1) - D(0)) / 2, Fwd = dA/dw'. Shapes
+    ``co``'s + (5, 5); units those of A per rad/s, (rad/s)^2 and rad/s^2.
+    """
+    at_rest, slope, by_acceleration = derivative_parts(co)
+    return system_matrix(co, 0.0, 0.0), at_rest, 0.5 * slope, by_acceleration
+
+
+_PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+"""The commutators [F_a, F_b] (a < b) of the four features that a Magnus-4 step needs."""
+_FIRST, _SECOND = (np.array(index) for index in zip(*_PAIRS))
+
+
+def magnus4_basis(features) -> np.ndarray:
+    """The features (:func:`system_features`) and their commutators [F_a, F_b], a < b.
+
+    Shape ``(..., 10, 5, 5)``: every fourth-order Magnus exponent of the system, and
+    its derivatives by w and w' at the Gauss points, is a combination of these ten
+    matrices with coefficients that depend on the speeds only
+    (:func:`magnus4_coefficients`).
+    """
+    F = [np.asarray(f, dtype=float) for f in features]
+    return np.stack(F + [_commutator(F[a], F[b]) for a, b in _PAIRS], axis=-3)
+
+
+def magnus4_coefficients(h, w1, wd1, w2, wd2, *, derivatives: bool = False) -> np.ndarray:
+    """Coefficients of :func:`magnus4` on :func:`magnus4_basis`, one row per step.
+
+    With A_i = sum_a c_a(i) F_a, c(i) = (1, w_i, w_i^2, w'_i) at the Gauss points t1,
+    t2 of a step of length h (s): Omega = h/2 (A1 + A2) + (sqrt(3)/12) h^2 [A2, A1] =
+    sum_a h/2 (c_a(1) + c_a(2)) F_a + sum_(a<b) (sqrt(3)/12) h^2 (c_a(2) c_b(1) -
+    c_b(2) c_a(1)) [F_a, F_b]. Shape ``(N, 10)`` for N steps (``h`` scalar; the speeds,
+    rad/s, and accelerations, rad/s^2, of shape (N,)). With ``derivatives``, shape
+    ``(N, 5, 10)``: that row, then its derivatives by w(t1), w'(t1), w(t2), w'(t2)
+    (:func:`magnus4_derivative` along dA/dw and dA/dw' at either Gauss point).
+    """
+    w1, wd1, w2, wd2 = (np.asarray(x, dtype=float) for x in (w1, wd1, w2, wd2))
+    one, zero = np.ones_like(w1), np.zeros_like(w1)
+    c1 = np.stack([one, w1, w1 * w1, wd1], axis=-1)             # (N, 4)
+    c2 = np.stack([one, w2, w2 * w2, wd2], axis=-1)
+
+    def row(total, later, earlier):
+        """h/2 (sum of the features by ``total``) + c h^2 [later, earlier]'s coefficients."""
+        cross = (later[:, _FIRST] * earlier[:, _SECOND] - later[:, _SECOND] * earlier[:, _FIRST])
+        return np.concatenate([0.5 * h * total, _C4 * h * h * cross], axis=-1)
+
+    omega = row(c1 + c2, c2, c1)
+    if not derivatives:
+        return omega
+    by_speed = [np.stack([zero, one, 2.0 * w, zero], axis=-1) for w in (w1, w2)]
+    by_acceleration = np.stack([zero, zero, zero, one], axis=-1)
+    rows = [omega,
+            row(by_speed[0], c2, by_speed[0]), row(by_acceleration, c2, by_acceleration),
+            row(by_speed[1], by_speed[1], c1), row(by_acceleration, by_acceleration, c1)]
+    return np.stack(rows, axis=-2)
+
+
+def magnus4_combination(coefficients: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """The matrices sum_m coefficients[..., m] basis[..., m, :, :], for every system.
+
+    ``coefficients``: rows of :func:`magnus4_coefficients`, shape ``(N, 10)`` or
+    ``(N, P, 10)``; ``basis``: :func:`magnus4_basis`, shape ``(B, 10, 5, 5)`` (B
+    systems) or ``(10, 5, 5)``. Returns shape ``(B, N, 5, 5)`` or ``(B, N, P, 5, 5)``
+    (without B for one system): one matrix product per system.
+    """
+    lead, n = basis.shape[:-3], basis.shape[-1]
+    rows = coefficients.reshape(-1, coefficients.shape[-1])
+    out = rows @ basis.reshape(lead + (basis.shape[-3], n * n))
+    return out.reshape(lead + coefficients.shape[:-1] + (n, n))
 
 
 def magnus6(h, A1, A2, A3) -> np.ndarray:
@@ -441,16 +518,22 @@ def frechet_boole(quarter: np.ndarray, E: np.ndarray, x: np.ndarray) -> np.ndarr
     on three points leaves ~|Omega|^4 / 2880, too coarse for a whirl 1e-4 of the
     deflection). Shapes: ``quarter`` ``(..., n, n)``, ``E`` ``(P, ..., n, n)`` (P
     directions), ``x`` ``(..., n)``; returns ``(P, ..., n)``.
+
+    The P directions go together: each E applied to the five states exp(k Omega / 4) x
+    at once, then Horner's scheme in exp(Omega / 4) on the n x P columns.
     """
-    def apply(M, y):
-        return (M @ y[..., None])[..., 0]
-    later = [x]                                  # exp(k Omega / 4) x, k = 0..4
+    P, n = E.shape[0], E.shape[-1]
+    rows = np.moveaxis(E, 0, -3)                 # (..., P, n, n): the directions' rows
+    rows = rows.reshape(rows.shape[:-3] + (P * n, n))
+    later = [np.asarray(x)[..., None]]           # exp(k Omega / 4) x, k = 0..4, as columns
     for _ in range(4):
-        later.append(apply(quarter, later[-1]))
-    total = 7.0 * apply(E, later[0])             # s = 1: exp(Omega) E x, by Horner below
-    for weight, v in zip((32.0, 12.0, 32.0, 7.0), later[1:]):
-        total = apply(quarter, total) + weight * apply(E, v)
-    return total / 90.0
+        later.append(quarter @ later[-1])
+    applied = rows @ np.concatenate(later, axis=-1)                 # (..., P n, 5)
+    applied = np.moveaxis(applied.reshape(applied.shape[:-2] + (P, n, 5)), -3, -1)
+    total = 7.0 * applied[..., 0, :]             # s = 1: exp(Omega) E x, by Horner below
+    for k, weight in zip(range(1, 5), (32.0, 12.0, 32.0, 7.0)):
+        total = quarter @ total + weight * applied[..., k, :]       # (..., n, P)
+    return np.moveaxis(total / 90.0, -1, 0)
 
 
 def sensitivity_chain(phi: np.ndarray, forcing: np.ndarray) -> np.ndarray:
@@ -462,6 +545,9 @@ def sensitivity_chain(phi: np.ndarray, forcing: np.ndarray) -> np.ndarray:
     N = phi.shape[-3]
     S = np.empty(forcing.shape[:-3] + (N + 1,) + forcing.shape[-2:])
     S[..., 0, :, :] = 0.0
-    for j in range(N):
-        S[..., j + 1, :, :] = phi[..., j, :, :] @ S[..., j, :, :] + forcing[..., j, :, :]
+    S[..., 1:, :, :] = forcing
+    carried = np.empty(S.shape[:-3] + S.shape[-2:])
+    for j in range(N):                  # S_j+1 = forcing_j + phi_j S_j, in place
+        np.matmul(phi[..., j, :, :], S[..., j, :, :], out=carried)
+        S[..., j + 1, :, :] += carried
     return S

@@ -286,6 +286,62 @@ def test_the_whirl_of_a_measured_motion_is_the_fitted_free_whirl():
         fitted_whirl_residual(p, 2.0, t[:3], u[:3], v[:3])
 
 
+def test_the_planners_steps_are_the_kernels_magnus_steps():
+    """The planner forms every step's Magnus exponent and its derivatives by w and w' at
+    the Gauss points as combinations of ten matrices per rod (one matrix product for all
+    steps), and exponentiates a quarter step in balanced coordinates by grouped powers:
+    the same, to rounding, as the kernel's magnus4 and magnus4_derivative of its system
+    matrices and scipy's expm (an anisotropic, damped rod and two stiffness scales)."""
+    from scipy.linalg import expm
+
+    from rotrod_core.model import propagation
+    params = RECT.replace(damping_ratio=0.02)
+    problem = planner._Problem(params, 0.5, 2.0, 3e-3, 2.5e-7, [1.0, 1.1], None, 10)
+    T, y = 0.9, problem.initial_shape()
+    run = planner._Run(problem.batch, problem.grid, T, problem.control_points(y))
+    coefficients = propagation.magnus4_coefficients(run.h, run.w1, run.wd1, run.w2, run.wd2,
+                                                    derivatives=True)
+    combined = propagation.magnus4_combination(coefficients, problem.batch.basis)
+    for b, sample in enumerate(problem.samples):
+        A1 = propagation.system_matrix(sample.co, run.w1, run.wd1)
+        A2 = propagation.system_matrix(sample.co, run.w2, run.wd2)
+        dw1, da1 = propagation.system_matrix_derivatives(sample.co, run.w1, run.wd1)
+        dw2, da2 = propagation.system_matrix_derivatives(sample.co, run.w2, run.wd2)
+        expected = [propagation.magnus4(run.h, A1, A2),
+                    propagation.magnus4_derivative(run.h, A1, A2, dw1, 0.0),
+                    propagation.magnus4_derivative(run.h, A1, A2, da1, 0.0),
+                    propagation.magnus4_derivative(run.h, A1, A2, 0.0, dw2),
+                    propagation.magnus4_derivative(run.h, A1, A2, 0.0, da2)]
+        for i, M in enumerate(expected):
+            assert np.max(np.abs(combined[b, :, i] - M)) <= 1e-14 * np.max(np.abs(M)), (b, i)
+        for k in (0, len(run.w1) // 2, len(run.w1) - 1):
+            exact = expm(0.25 * expected[0][k])
+            assert np.max(np.abs(run.quarter[b, k] - exact)) <= 1e-14 * np.max(np.abs(exact))
+
+
+def test_the_planners_gradients_are_the_difference_quotients(robust):
+    """At the robust plan (every band whirl at its aim, the deflection near its limit),
+    the gradients of the constraint ratios the minimax solver steps along (each band
+    sample's whirl, the deflection on every node) are those of the ratios themselves:
+    central differences of values() agree to 1e-6 of each group's largest gradient."""
+    family = planner._Family(TABLE1, 0.0, 2.0, 3e-3, 1e-6, 0.1, None)
+    T = robust.duration
+    problem = family.problem(T)
+    limits = problem.limits(T)
+    y = problem.fit(robust.control_points)
+    values, gradients, _ = limits.model(y)
+    assert np.array_equal(values, limits.values(y))
+    band = len(problem.samples)
+    e = 1e-6
+    for j in (0, len(y) // 2, len(y) - 1):
+        step = np.zeros_like(y)
+        step[j] = e
+        quotient = (limits.values(y + step) - limits.values(y - step)) / (2 * e)
+        for rows in (slice(0, band), slice(band, None)):
+            error = np.max(np.abs(quotient[rows] - gradients[rows, j]))
+            assert error <= 1e-6 * np.max(np.abs(gradients[rows, j])), (j, rows)
+
+
 _PLAN_SUMMARY = """
 import json, sys
 from rotrod_core import RodParams, plan_spin_up
