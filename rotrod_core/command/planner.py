@@ -30,7 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import BSpline
-from scipy.linalg import solve_triangular
 from scipy.optimize import nnls
 
 import rotrod_core.model.propagation as propagation
@@ -571,8 +570,8 @@ def _quadratic_program(Q, q, A, b):
     Q = L L^T and u = L^T x + L^-1 q, minimise |u| subject to G u >= h.
     """
     L = np.linalg.cholesky(Q)
-    Lq = solve_triangular(L, q, lower=True)
-    AL = solve_triangular(L, A.T, lower=True).T          # A L^-T
+    Lq = np.linalg.solve(L, q)
+    AL = np.linalg.solve(L, A.T).T             # A L^-T
     G, h = -AL, -(b + AL @ Lq)
     E = np.concatenate([G.T, h[None, :]])
     f = np.zeros(len(q) + 1)
@@ -581,7 +580,7 @@ def _quadratic_program(Q, q, A, b):
     r = E @ lam - f
     if abs(r[-1]) < 1e-12:
         return None
-    x = solve_triangular(L, -r[:-1] / r[-1] - Lq, lower=True, trans='T')
+    x = np.linalg.solve(L.T, -r[:-1] / r[-1] - Lq)
     return x, lam / (1.0 - h @ lam)
 
 
