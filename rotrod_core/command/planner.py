@@ -257,20 +257,29 @@ def _propagate(samples, grid: _Grid, T: float, c: np.ndarray) -> tuple[np.ndarra
     return run.X, run
 
 
-def _sensitivities(run: _Run, batch: _Batch, shape_derivatives: np.ndarray) -> np.ndarray:
-    """d(state)/d(control points) on every node, shape (B, N + 1, 5, k).
+def _sensitivities(run: _Run, batch: _Batch,
+                   shape_derivatives: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """d(state)/d(control points): the nominal's (u, v) on every node, every sample's end.
 
-    ``shape_derivatives`` (N, 4, k): d(w, w' at the two Gauss points of each step)/
-    d(the k control points). Per step, the derivatives of its Magnus exponent by w and
-    w' at its Gauss points, the Frechet derivative of the step's exponential along
-    them, and the forward sensitivity chain: all the kernel's.
+    Returns (N, 2, k) for nodes 1..N of the nominal sample and (B, 4, k) for the end
+    states (u, v, u', v') of all samples (m and m/s per rad/s). ``shape_derivatives``
+    (N, 4, k): d(w, w' at the two Gauss points of each step)/d(the k control points).
+    Per step, the derivatives of its Magnus exponent by w and w' at its Gauss points
+    and the Frechet derivative of the step's exponential along them; then the nominal
+    sample's forward sensitivities on every node, and every sample's end by the adjoint
+    chain (the end's derivative by each step's state). All the kernel's.
     """
     coefficients = propagation.magnus4_coefficients(run.h, run.w1, run.wd1, run.w2, run.wd2,
                                                     derivatives=True)[:, 1:]
     E = propagation.magnus4_combination(coefficients, batch.basis)     # (B, N, 4, 5, 5)
     dx = propagation.frechet_boole(run.quarter, np.moveaxis(E, -3, 0), run.X[:, :-1])
-    D = np.moveaxis(dx, 0, -1) @ shape_derivatives             # (B, N, 5, 4) @ (N, 4, k)
-    return propagation.sensitivity_chain(run.phi, D)
+    by_step = np.moveaxis(dx, 0, -1)                       # (B, N, 5, 4): d(step)/d(w, w')
+    nominal = propagation.sensitivity_chain(run.phi[0], by_step[0] @ shape_derivatives)
+    lam = propagation.adjoint_chain(run.phi, np.eye(4, 5))             # (B, N + 1, 4, 5)
+    ends = lam[:, 1:] @ by_step                                        # (B, N, 4, 4)
+    B, N = ends.shape[:2]
+    ends = np.moveaxis(ends, 1, 2).reshape(B, 4, N * 4) @ shape_derivatives.reshape(N * 4, -1)
+    return nominal[1:, :2], ends
 
 
 def _residuals(samples, X) -> np.ndarray:
@@ -481,15 +490,15 @@ class _Limits:
         p = self.problem
         run = self.run(y)
         X = run.X
-        S = _sensitivities(run, p.batch, self.shape_derivatives)
+        nodes, ends = _sensitivities(run, p.batch, self.shape_derivatives)
         whirl = p.whirl
         a = whirl.components(X[:, -1, :4]) / self.aim          # (B, m)
-        J = whirl.rows @ (S[:, -1, :4] * (p.dw / self.aim))    # (B, m, n)
+        J = whirl.rows @ (ends * (p.dw / self.aim))            # (B, m, n)
         gradients = 2 * whirl.count[:, None] * np.einsum('bm,bmn->bn', np.conj(a), J).real
         factors = [math.sqrt(2 * m) * np.concatenate([Jb[:m].real, Jb[:m].imag])
                    for m, Jb in zip(whirl.count, J)]
         u, v = X[0, 1:, 0], X[0, 1:, 1]
-        Ju, Jv = S[0, 1:, 0] * p.dw, S[0, 1:, 1] * p.dw
+        Ju, Jv = nodes[:, 0] * p.dw, nodes[:, 1] * p.dw
         values = np.concatenate([whirl.squared(a), (u * u + v * v) / self.d2])
         gradients = np.concatenate([gradients,
                                     2 * (u[:, None] * Ju + v[:, None] * Jv) / self.d2])

@@ -26,7 +26,8 @@ and rig identification (the live RK4 stepper evaluates the same
   one matrix product per system for all the steps of a profile (the planner's).
 - Chains: :func:`affine_chain` (states x_k of x_{k+1} = phi_k x_k, blocked products),
   :func:`frechet_boole` (the derivative of a step's exponential applied to the
-  state) and :func:`sensitivity_chain` (forward sensitivities along the chain).
+  state), :func:`sensitivity_chain` (forward sensitivities along the chain) and
+  :func:`adjoint_chain` (the derivative of the end state by every earlier one).
 
 Model: docs/model.md#kernel, docs/model.md#eq-deflection.
 
@@ -534,6 +535,22 @@ def frechet_boole(quarter: np.ndarray, E: np.ndarray, x: np.ndarray) -> np.ndarr
     for k, weight in zip(range(1, 5), (32.0, 12.0, 32.0, 7.0)):
         total = quarter @ total + weight * applied[..., k, :]       # (..., n, P)
     return np.moveaxis(total / 90.0, -1, 0)
+
+
+def adjoint_chain(phi: np.ndarray, final: np.ndarray) -> np.ndarray:
+    """Row vectors lambda_N = ``final``, lambda_k = lambda_k+1 phi_k: d(final x_N)/dx_k.
+
+    For the chain x_k+1 = phi_k x_k (:func:`affine_chain`), lambda_k is the derivative
+    of ``final`` x_N by the state at node k, so that a change dx_k made in step k moves
+    final x_N by lambda_k+1 dx_k. ``phi`` ``(..., N, n, n)``, ``final`` ``(r, n)`` or
+    ``(..., r, n)``; returns ``(..., N + 1, r, n)``.
+    """
+    N = phi.shape[-3]
+    lam = np.empty(phi.shape[:-3] + (N + 1,) + np.shape(final)[-2:])
+    lam[..., N, :, :] = final
+    for k in range(N - 1, -1, -1):
+        np.matmul(lam[..., k + 1, :, :], phi[..., k, :, :], out=lam[..., k, :, :])
+    return lam
 
 
 def sensitivity_chain(phi: np.ndarray, forcing: np.ndarray) -> np.ndarray:
