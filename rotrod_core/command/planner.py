@@ -13,9 +13,10 @@ state matrix, gives the two whirls and their amplitudes. w(t) is a clamped cubic
 B-spline (w' = 0 at both ends). At a fixed duration T its free control points
 minimise the largest of the constraint ratios (every band sample's whirl, every grid
 node's deflection, each as a squared norm over its limit), within the acceleration
-bound: a minimax problem solved to convergence by sequential quadratic programming
-with the ratios' Gauss-Newton curvature, from the exact gradients of a forward
-sensitivity of the fourth-order Magnus propagator. Its value M(T) decides
+bound: a minimax problem solved to convergence (a step predicting less than 1e-6 of
+M) by sequential quadratic programming with the ratios' Gauss-Newton curvature, from
+the exact gradients of the fourth-order Magnus propagator (forward sensitivities for
+the deflection on every node, the adjoint for the end states). Its value M(T) decides
 feasibility (M <= 1); the duration is the shortest whole number of milliseconds
 found feasible by bracketing and bisection, each solve warm-started from the
 nearest duration solved. The result is checked afterwards on finer grids (time steps
