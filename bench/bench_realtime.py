@@ -238,7 +238,7 @@ def fast_recorded_run(duration: float) -> dict:
                                *ros_arguments(params={'output': str(out)})],
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
-        while 'recording to' not in logger.stderr.readline():
+        while 'subscribed to the simulator' not in logger.stderr.readline():
             if logger.poll() is not None:
                 raise RuntimeError('rerun_logger did not start')
         sim = Simulator(real_time_factor=0.0)    # waits for the logger by default

@@ -7,7 +7,7 @@ profile to end, stops the logger (which closes the recording) and the simulator,
 reads the recording back and prints, per stage, the extreme u and v beside the
 offline ``simulate`` run of the same profile.
 
-``--profile planned`` streams the planned spin-up of config/planned.yaml instead
+``--profile planned`` sends the planned spin-up of config/planned.yaml instead
 (added after the other files, for every node) and holds 2 rad/s for HOLD s after it;
 it prints the arrival, the peak deflection and the whirl left after arrival, recorded
 beside the offline run of the plan the profile publisher made from the same files.
@@ -39,7 +39,7 @@ from rotrod_core.analysis.modes import static_deflection
 from rotrod_core.analysis.stages import format_stage_table, series_stage_extremes
 from rotrod_core.command.planner import fitted_whirl_residual
 from rotrod_core.command.profiles import Eq26Profile, SpinUpProfile
-from rotrod_core.command.registry import describe, profile_from_options
+from rotrod_core.command.registry import describe, plan_from_options
 from rotrod_core.reporting import recording
 
 from .child_process import ending_with_this_process
@@ -76,20 +76,28 @@ def param_files(profile: str = 'eq26') -> tuple[str, ...]:
     return PARAM_FILES + ((PLANNED_FILE,) if profile == 'planned' else ())
 
 
-def planned_profile(files: Iterable[str]) -> tuple[SpinUpProfile, dict[str, Any]]:
-    """The plan the profile publisher makes from ``files``: (profile, its options).
-
-    The files' "/**" and "/**/rotrod_profile_publisher" parameters over the defaults,
-    through the same functions as the node (rod_params, profile_from_options).
-    """
-    values = defaults()
+def _file_values(files: Iterable[str], node: str, values: dict) -> dict:
+    """``values`` updated with the files' "/**" and "/**/<node>" parameters, in order."""
+    values = dict(values)
     for f in files:
         doc = yaml.safe_load(share_file(f).read_text()) or {}
-        for key in ('/**', '/**/rotrod_profile_publisher'):
+        for key in ('/**', f'/**/{node}'):
             values.update((doc.get(key) or {}).get('ros__parameters') or {})
-    profile = profile_from_options('planned', values, rod_params(values))
-    assert isinstance(profile, SpinUpProfile)       # what a 'planned' profile is
-    return profile, values
+    return values
+
+
+def planned_profile(files: Iterable[str]) -> tuple[SpinUpProfile, dict[str, Any], RodParams]:
+    """The plan the profile publisher makes from ``files``: (profile, its options, rod).
+
+    As the node plans it: for the simulator's rod and limits (the simulator's parameters
+    from the files: what its robot_description carries), with the publisher's options,
+    through the same functions (rod_params, plan_from_options).
+    """
+    simulator = _file_values(files, 'rotrod_simulator', defaults())
+    params = rod_params(simulator)
+    options = _file_values(files, 'rotrod_profile_publisher', {
+        name: simulator[name] for name in ('max_angular_acceleration', 'deflection_limit')})
+    return plan_from_options(params, options), options, params
 
 
 def node_commands(output: Path, speed: float | None, real_time: bool, profile: str = 'eq26',
@@ -187,7 +195,7 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     planned: SpinUpProfile | None = None
     eq26 = Eq26Profile(period=15.0, omega_target=2.0)
     if profile == 'planned':
-        planned, values = planned_profile(param_files(profile))
+        planned, values, planned_rod = planned_profile(param_files(profile))
         t_run = planned.end_time + HOLD
         what = f'the planned spin-up of {PLANNED_FILE} (Table 1)'
         cmds = node_commands(output, speed, real_time, profile, duration=t_run)
@@ -232,7 +240,7 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     wall = time.monotonic() - t0
     late = late_setpoints(procs.log('simulator'))
     if planned is not None:
-        summary = summarize_planned(output, planned, rod_params(values), t_run)
+        summary = summarize_planned(output, planned, planned_rod, t_run)
     else:
         summary = summarize(output, eq26, t_run)
     summary['wall_s'] = wall

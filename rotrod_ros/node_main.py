@@ -83,7 +83,8 @@ def _wake_on_signals(node) -> None:
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *,
         until: Callable | None = None, started: Callable | None = None,
-        finished: Callable | None = None, own_signals: bool = False) -> int:
+        finished: Callable | None = None, own_signals: bool = False,
+        status: Callable | None = None) -> int:
     """Parse non-ROS arguments (``--help``), build the node, spin, shut down cleanly.
 
     Args:
@@ -97,6 +98,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         own_signals: SIGINT and SIGTERM end the spin with the context still up, so
             ``finished`` can still publish and wait for acknowledgements (Python's
             handlers, woken through a pipe: :func:`_wake_on_signals`).
+        status: called with the node after spinning: the exit status (default 0).
 
     SIGINT and SIGTERM end the spin (rclpy's handlers shut the context down, unless
     ``own_signals``); an error raised by rclpy while the context is shutting down is
@@ -134,7 +136,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         except Exception:
             if not (_SIGNALLED or _shutting_down()):
                 raise
-        return 0
+        return 0 if status is None else status(node)
     finally:
         if executor is not None:
             executor.shutdown()

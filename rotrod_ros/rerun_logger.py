@@ -8,9 +8,11 @@ serves the recording live on 127.0.0.1:``serve_port`` (``rerun --connect``). Wit
 ``record_from:=motion`` it keeps only the last ``pretrigger`` seconds until the hub's
 angular velocity first changes: the file begins just before the motion, not when the
 logger started. The recording draws the mechanism in 3D from ``joint_states`` (the hub
-angle and the tip joints' true deflection) with the rod parameters given here (give
-the logger the simulator's: config/table1.yaml does), and marks the run's stages and
-its first passage of ``deflection_limit``.
+angle and the tip joints' true deflection) with the simulator's rod, read from its
+``robot_description`` (:mod:`rotrod_ros.rod_source`; a drawn parameter given here
+overrides it, with a warning), and marks the run's stages and its first passage of
+``deflection_limit``. It opens the recording and subscribes once it has the rod (at
+once if every drawn parameter is given here).
 
 Data is written in batches every ``flush_period`` seconds. On SIGINT, SIGTERM or the
 end of the run the messages already received but not yet handled are taken too, the
@@ -34,6 +36,7 @@ import math
 import os
 import sys
 import time
+from collections import deque
 from dataclasses import replace
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -47,7 +50,7 @@ from rotrod_core.model.geometry import sphere_radius
 from rotrod_core.reporting.recording import RecordingWriter
 from rotrod_core.reporting.recording_scene import Mechanism
 
-from . import interfaces, node_main, parameter_specs
+from . import interfaces, node_main, parameter_specs, rod_source
 from .interfaces import ALWAYS
 from .messages import to_seconds
 from .node_main import ConfigurationError
@@ -60,6 +63,9 @@ QOS_DEPTH = 1000
 publications is not dropped); with a simulator started as fast as possible, KEEP_ALL on
 both sides: the simulator waits for the logger instead of dropping (ALWAYS)."""
 
+EARLY_MESSAGES = 100_000
+"""Messages kept at most before the recording opens (the simulator's robot_description
+normally comes before its first sample)."""
 TAKE_BUDGET = 0.05
 """Wall seconds a callback spends at most taking the messages already received (the
 flush timer runs between)."""
@@ -70,6 +76,8 @@ RECORD_FROM = ('start', 'motion')
 DRAWN = ('mass', 'rod_length', 'rod_diameter', 'eccentricity', 'deflection_limit',
          'marker_deflection_scale', 'disk_radius')
 """The simulator's parameters the recording draws with (the same names and defaults)."""
+FROM_DESCRIPTION = ('mass', 'rod_length', 'rod_diameter', 'eccentricity', 'deflection_limit')
+"""The drawn parameters the simulator's robot_description gives (the disk radius too)."""
 PARAMETERS: tuple[Spec, ...] = (
     Spec('output', 'rotrod.rrd', 'path of the Rerun recording to write'),
     Spec('serve', False, 'also serve the recording live on 127.0.0.1 (rerun --connect)'),
@@ -86,13 +94,16 @@ PARAMETERS: tuple[Spec, ...] = (
     Spec('pretrigger', 0.5, 'with record_from motion: stamp time kept from before the hub '
          'first moved', 's', 0.0, 86400.0),
     *(replace(SPECS_BY_NAME[name], read_only=True,
-              text=f"as the simulator's, for the 3D scene: {SPECS_BY_NAME[name].text}")
-      for name in DRAWN),
+              text=f"for the 3D scene; not given: the simulator's (robot_description), "
+                   f'given: overrides it: {SPECS_BY_NAME[name].text}')
+      for name in DRAWN if name != 'marker_deflection_scale'),
+    replace(SPECS_BY_NAME['marker_deflection_scale'], read_only=True,
+            text=f"for the 3D scene: {SPECS_BY_NAME['marker_deflection_scale'].text}"),
 )
 READ_ONLY = True
 """The logger's parameters are set at start only."""
 
-INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pending)
+SAMPLES = (   # in the order a simulator's tick publishes them (see _take_pending)
     interfaces.sub('joint_states', JointState, "joint 'hub': w rad/s and the hub torque "
                    'N m', QOS_DEPTH, ALWAYS),
     interfaces.sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame',
@@ -107,6 +118,7 @@ INTERFACES = (   # in the order a simulator's tick publishes them (see _take_pen
     interfaces.sub('/diagnostics', DiagnosticArray, "the simulator's of this namespace: a "
                    'halt (and its clearing) is an entry in the recording\'s events', QOS_DEPTH),
 )
+INTERFACES = (*SAMPLES, rod_source.interface('the rod the recording draws'))
 EVERY_TICK = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies')
 """The topics a simulator publishes at every tick (the others now and then)."""
 SIMULATOR = 'rotrod_simulator'
@@ -124,28 +136,27 @@ class RerunLogger(Node):
         if not values['flush_period'] > 0:
             raise ConfigurationError(f'flush_period must be in (0, 60] s, got '
                                      f'{values["flush_period"]!r}')
-        on_motion = values['record_from'] == 'motion'
-        try:
-            self.mechanism = Mechanism(
-                eccentricity=values['eccentricity'], rod_length=values['rod_length'],
-                rod_diameter=values['rod_diameter'],
-                mass_radius=sphere_radius(values['mass']), disk_radius=values['disk_radius'],
-                deflection_scale=values['marker_deflection_scale'],
-                deflection_limit=values['deflection_limit'])
-            self.writer = RecordingWriter(values['output'],
-                                          serve_port=values['serve_port'] if values['serve']
-                                          else None,
-                                          pretrigger=values['pretrigger'] if on_motion
-                                          else None, mechanism=self.mechanism,
-                                          footer=values['footer'])
-        except ValueError as exc:
-            raise ConfigurationError(str(exc)) from None
-        except Exception as exc:  # rerun raises several kinds for a bad path or port
-            raise ConfigurationError(f'cannot open the recording: {exc}') from None
+        self._values = values
+        self._writer: RecordingWriter | None = None
+        self._early: deque = deque(maxlen=EARLY_MESSAGES)
+        self._subscribe()
+        self.get_logger().info(f'subscribed to the simulator\'s topics in '
+                               f'{self.get_namespace()}: the recording opens with its rod')
+        self.rod = rod_source.RodSource(self, FROM_DESCRIPTION, self._on_description,
+                                        'the recording\'s 3D scene')
+        if set(rod_source.explicit_values(self, FROM_DESCRIPTION)) == set(FROM_DESCRIPTION):
+            self._open(self._mechanism(values, values['disk_radius']))      # all given
+        self._timer = self.create_timer(values['flush_period'], self._flush,
+                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def _subscribe(self) -> None:
+        """Subscribe to the simulator's topics.
+
+        Messages that come before the recording opens are kept, then handled in order.
+        """
         self._last_stamp: float | None = None
         self._joints: tuple = ((), None)    # (names, indices of hub, tip_radial, tip_tangential)
         self._height_checked = False
-        # joint states' (DDS source time ns, stamp s), oldest first, for the frequencies
         handlers = {'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
                     'tip/position': self._on_position,
                     'frequencies': lambda m, info: self._on_frequencies(m, info, False),
@@ -154,28 +165,90 @@ class RerunLogger(Node):
                     '/diagnostics': self._on_diagnostics}
         self._simulator = self.get_namespace().rstrip('/') + '/' + SIMULATOR
         self._halted = 'no'
-        self._handlers = [handlers[i.name] for i in INTERFACES]
+        self._handlers = [handlers[i.name] for i in SAMPLES]
 
         def received(index):
             def callback(msg, info):
+                if self._writer is None:             # kept until the recording opens
+                    self._early.append((index, msg, info))
+                    return
                 self._handlers[index](msg, info)
                 self._take_pending()
             return callback
-        io = interfaces.create(self, INTERFACES, {
-            i.name: received(k) for k, i in enumerate(INTERFACES)})
-        self._topics = [io[i.name] for i in INTERFACES]     # in a tick's order
+        io = interfaces.create(self, SAMPLES, {
+            i.name: received(k) for k, i in enumerate(SAMPLES)})
+        self._topics = [io[i.name] for i in SAMPLES]     # in a tick's order
         pairs = list(zip(self._topics, self._handlers))
         # every tick publishes these: taken in turn; the others (an estimate every
         # tenth tick, diagnostics) are drained after them, which spares a take that
         # finds nothing per tick (each costs about as much as one that finds a message)
-        self._every_tick = [p for i, p in zip(INTERFACES, pairs) if i.name in EVERY_TICK]
-        self._sometimes = [p for i, p in zip(INTERFACES, pairs) if i.name not in EVERY_TICK]
-        self._timer = self.create_timer(values['flush_period'], self._flush,
-                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._every_tick = [p for i, p in zip(SAMPLES, pairs) if i.name in EVERY_TICK]
+        self._sometimes = [p for i, p in zip(SAMPLES, pairs) if i.name not in EVERY_TICK]
+
+    @property
+    def writer(self) -> RecordingWriter:
+        """The recording (opened once the rod is known: the handlers run after that)."""
+        assert self._writer is not None
+        return self._writer
+
+    @property
+    def recording(self) -> bool:
+        """Whether the recording is open."""
+        return self._writer is not None
+
+    def _mechanism(self, drawn: dict, disk_radius: float) -> Mechanism:
+        try:
+            return Mechanism(
+                eccentricity=float(drawn['eccentricity']),
+                rod_length=float(drawn['rod_length']),
+                rod_diameter=float(drawn['rod_diameter']),
+                mass_radius=sphere_radius(float(drawn['mass'])), disk_radius=disk_radius,
+                deflection_scale=self._values['marker_deflection_scale'],
+                deflection_limit=float(drawn['deflection_limit']))
+        except ValueError as exc:
+            raise ConfigurationError(str(exc)) from None
+
+    def _on_description(self, description) -> None:
+        """The simulator's rod: open the recording with it (once)."""
+        if self.recording:
+            return
+        given = rod_source.explicit_values(self, ['disk_radius'])
+        disk = given.get('disk_radius', description.disk_radius or self._values['disk_radius'])
+        p = description.params
+        try:
+            self._open(self._mechanism({
+                'eccentricity': p.eccentricity, 'rod_length': p.rod_length,
+                'rod_diameter': p.rod_diameter, 'mass': p.mass,
+                'deflection_limit': description.limits.deflection_limit}, disk))
+        except ConfigurationError as exc:
+            self.get_logger().error(f'cannot draw the rod: {exc}')
+
+    def _open(self, mechanism: Mechanism) -> None:
+        """Open the recording with ``mechanism``; handle the messages kept until now."""
+        values = self._values
+        self.mechanism = mechanism
+        on_motion = values['record_from'] == 'motion'
+        try:
+            self._writer = RecordingWriter(values['output'],
+                                           serve_port=values['serve_port'] if values['serve']
+                                           else None,
+                                           pretrigger=values['pretrigger'] if on_motion
+                                           else None, mechanism=self.mechanism,
+                                           footer=values['footer'])
+        except ValueError as exc:
+            raise ConfigurationError(str(exc)) from None
+        except Exception as exc:  # rerun raises several kinds for a bad path or port
+            raise ConfigurationError(f'cannot open the recording: {exc}') from None
         where = f'; serving at {self.writer.serve_uri}' if self.writer.serve_uri else ''
         footer = ('with a footer at the end' if values['footer'] else
                   'without footer (flat memory; footer:=true writes one at the end)')
         self.get_logger().info(f'recording to {self.writer.path}, {footer}{where}')
+        if len(self._early) == self._early.maxlen:
+            self.get_logger().warning(f'only the last {EARLY_MESSAGES} messages before the '
+                                      'rod\'s description are in the recording')
+        while self._early:
+            index, msg, info = self._early.popleft()
+            self._handlers[index](msg, info)
 
     def _joint_indices(self, names) -> tuple | None:
         """Indices of hub, tip_radial, tip_tangential in ``names`` (cached per name list).
@@ -268,6 +341,8 @@ class RerunLogger(Node):
         return taken
 
     def _flush(self) -> None:
+        if not self.recording:
+            return
         try:
             self.writer.flush()
         except Exception as exc:  # a slow or failing disk must not end the recording
@@ -276,6 +351,11 @@ class RerunLogger(Node):
 
     def close(self) -> None:
         """Handle the messages already received, write what is buffered, close the file."""
+        if not self.recording:
+            self.get_logger().warning('nothing recorded: the simulator\'s robot_description '
+                                      'never came (give the drawn parameters to record '
+                                      'without it)')
+            return
         drained = self._take_pending(budget=CLOSE_BUDGET)
         self.writer.close()
         if drained:

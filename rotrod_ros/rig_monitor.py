@@ -4,9 +4,10 @@ Node ``rotrod_rig_monitor``: topics below (INTERFACES), parameters after them, a
 at start; docs/nodes.md lists the same. Relative names, so ``--ros-args -r
 __ns:=/rod1`` watches the rod in /rod1, simulated or real. Samples of joint_states and
 tip/deflection are paired on their header stamps (both topics at the same instants).
-The nominal rig is given by the same rod parameters as the simulator's (defaults: the
-paper's Table 1). The identification itself is rotrod_core's
-(docs/identification.md).
+The nominal rig is the simulator's rod, read from its ``robot_description``
+(:mod:`rotrod_ros.rod_source`; a rod parameter given here overrides that field, with a
+warning naming it): the monitor starts identifying once it has it. The identification
+itself is rotrod_core's (docs/identification.md).
 """
 
 from __future__ import annotations
@@ -21,12 +22,13 @@ from rotrod_interfaces.msg import RigEstimate
 from sensor_msgs.msg import JointState
 
 from rotrod_core.estimation.monitor import MonitorConfig, RigMonitor
+from rotrod_core.model.params import RodParams
 
-from . import interfaces, messages, node_main, parameter_specs
+from . import interfaces, messages, node_main, parameter_specs, rod_source
 from .interfaces import pub, sub
 from .node_main import ConfigurationError
 from .parameter_specs import Spec
-from .parameters import ROD_SPECS, rod_params
+from .parameters import ROD_SPECS
 
 NODE_NAME = 'rotrod_rig_monitor'
 QOS_DEPTH = 1000
@@ -37,8 +39,8 @@ MONITOR_SPECS = (
          1e-5, 10.0),
     Spec('update_rate', 10.0, 'identifications per second of the samples\' time', 'Hz',
          0.01, 1000.0),
-    Spec('deflection_limit', 0.003, 'the critical deflection behind the critical speed',
-         'm', 1e-9, 100.0),
+    Spec('deflection_limit', 0.003, 'the critical deflection behind the critical speed; '
+         "not given: the simulator's (robot_description)", 'm', 1e-9, 100.0),
     Spec('critical_margin', 0.1, 'WARN when |w| is within this fraction of the '
          'identified critical speed', '1', 0.0, 0.99),
     Spec('stiffness_tolerance', 0.05, 'WARN when the identified stiffness is off the '
@@ -59,6 +61,7 @@ INTERFACES = (
     pub('/diagnostics', DiagnosticArray, 'WARN near the identified critical speed '
         '(critical_margin), with the stiffness off its nominal value '
         '(stiffness_tolerance), and before the first estimate (with why)'),
+    rod_source.interface('the nominal rig'),
 )
 
 
@@ -68,31 +71,49 @@ class RigMonitorNode(Node):
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         values = parameter_specs.declare(self, ALL_SPECS, read_only=READ_ONLY)
-        try:
-            config = MonitorConfig(
-                nominal=rod_params(values), window=values['window'],
-                sample_interval=values['sample_interval'],
-                update_interval=1.0 / values['update_rate'],
-                deflection_limit=values['deflection_limit'],
-                critical_margin=values['critical_margin'],
-                stiffness_tolerance=values['stiffness_tolerance'])
-            self.monitor = RigMonitor(config)
+        self._values = values
+        try:        # the monitor's own settings, checked now on Table 1's rod
+            self._config(RodParams(), values['deflection_limit'])
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
+        self.monitor: RigMonitor | None = None
         self._last_level = None
         self._status_name = f'{self.get_fully_qualified_name()}: rig'
-        io = interfaces.create(self, INTERFACES, {'joint_states': self._on_joint,
-                                                  'tip/deflection': self._on_deflection})
+        io = interfaces.create(self, [i for i in INTERFACES if i.name != rod_source.TOPIC],
+                               {'joint_states': self._on_joint,
+                                'tip/deflection': self._on_deflection})
         self._pub_estimate, self._pub_diagnostics = io['rig/estimate'], io['/diagnostics']
         self.create_timer(1.0, lambda: self._diagnose(force=True))
+        self.rod = rod_source.RodSource(self, [s.name for s in ROD_SPECS] + ['deflection_limit'],
+                                        self._on_description, 'the nominal rig')
+
+    def _config(self, nominal: RodParams, deflection_limit: float) -> MonitorConfig:
+        values = self._values
+        return MonitorConfig(
+            nominal=nominal, window=values['window'],
+            sample_interval=values['sample_interval'],
+            update_interval=1.0 / values['update_rate'], deflection_limit=deflection_limit,
+            critical_margin=values['critical_margin'],
+            stiffness_tolerance=values['stiffness_tolerance'])
+
+    def _on_description(self, description) -> None:
+        """The simulator's rod (or a change of it): identify against it, from scratch."""
+        try:
+            config = self._config(description.params, description.limits.deflection_limit)
+            self.monitor = RigMonitor(config)
+        except ValueError as exc:
+            self.get_logger().error(f'cannot monitor this rod: {exc}')
+            return
         nominal = config.nominal
         self.get_logger().info(
             f'ready: identifying over {config.window:g} s windows; nominal natural '
-            f'frequency {float(nominal.natural_frequency):.6g} rad/s, stiffness '
-            f'{float(nominal.stiffness):.6g} N/m')
+            f'frequency {float(nominal.natural_frequency_radial):.6g} rad/s, stiffness '
+            f'{float(nominal.stiffness_radial):.6g} N/m')
 
     def _on_joint(self, msg: JointState) -> None:
         if messages.HUB_JOINT not in msg.name:
+            return
+        if self.monitor is None:
             return
         i = list(msg.name).index(messages.HUB_JOINT)
         if i >= len(msg.velocity):
@@ -103,6 +124,8 @@ class RigMonitorNode(Node):
                    msg.velocity[i])
 
     def _on_deflection(self, msg: Vector3Stamped) -> None:
+        if self.monitor is None:
+            return
         self._take(self.monitor.add_deflection, messages.to_seconds(msg.header.stamp),
                    msg.vector.x, msg.vector.y)
 
@@ -117,6 +140,8 @@ class RigMonitorNode(Node):
             self._diagnose()
 
     def _diagnose(self, force: bool = False) -> None:
+        if self.monitor is None:
+            return
         health = self.monitor.health()
         if not force and health.level == self._last_level:
             return

@@ -1,4 +1,4 @@
-"""The profile of a spin-up goal (the SpinUp action): what to stream, and for how long.
+"""The profile of a spin-up goal (the SpinUp action): what the hub is to follow.
 
 A goal names a target angular velocity and a profile: ``planned`` (the fastest
 vibration-free change from the current speed, :func:`rotrod_core.plan_spin_up`),
@@ -7,7 +7,8 @@ vibration-free change from the current speed, :func:`rotrod_core.plan_spin_up`),
 ``duration``) or ``ramp`` (a linear ramp over ``duration``). :func:`goal_profile`
 builds it through :mod:`rotrod_core.command.registry` (the names mean what they mean
 for the profile publisher's parameters and the CLI) or raises ValueError with the
-reason a goal is refused.
+reason a goal is refused. The profile starts at once (no lead at the start speed): it
+goes to the simulator as one trajectory, executed on the simulator's clock.
 """
 
 from __future__ import annotations
@@ -15,10 +16,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rotrod_core.command.profiles import Profile, SpinUpProfile
+from rotrod_core.command.profiles import Profile
 from rotrod_core.command.registry import (
-    PLAN_HOLD,
     options_with_defaults,
+    plan_from_options,
     profile_from_options,
 )
 from rotrod_core.model.params import RodParams
@@ -31,15 +32,14 @@ AT_REST = 1e-9
 
 @dataclass(frozen=True)
 class GoalProfile:
-    """What to stream for a goal: ``profile`` for ``stream_time`` s, ending at the target.
+    """What the hub follows for a goal: ``profile`` from 0, ending at the target.
 
-    ``change_time`` is when the profile's change ends (s from the stream's start);
-    ``predicted_residual`` the planner's predicted free whirl after arrival (m; NaN
-    for eq26 and ramp).
+    ``change_time`` is when the profile's change ends (s from its start), after which it
+    holds the target; ``predicted_residual`` the planner's predicted free whirl after
+    arrival (m; NaN for eq26 and ramp).
     """
 
     profile: Profile
-    stream_time: float
     change_time: float
     predicted_residual: float
 
@@ -77,11 +77,9 @@ def goal_profile(name: str, omega_start: float, omega_target: float, *,
         if name == 'planned_robust' and not 0.0 < robust_band < 1.0:
             raise ValueError(f'planned_robust needs robust_band in (0, 1), got {robust_band!r}')
         options['robust'] = robust_band if name == 'planned_robust' else 0.0
-        plan = profile_from_options('planned', options, params)
-        assert isinstance(plan, SpinUpProfile)
-        change = plan.t_start + plan.duration
+        plan = plan_from_options(RodParams() if params is None else params, options)
         predicted = plan.band_residual if name == 'planned_robust' else plan.residual_amplitude
-        return GoalProfile(plan, change + PLAN_HOLD, change,
+        return GoalProfile(plan, plan.end_time,
                            math.nan if predicted is None else float(predicted))
     if abs(omega_start) > AT_REST:
         raise ValueError(f'{name} starts from rest; the hub turns at {omega_start:g} rad/s '
@@ -95,7 +93,7 @@ def goal_profile(name: str, omega_start: float, omega_target: float, *,
         period = duration or o['ramp_time']
         profile = profile_from_options('ramp', {'ramp_time': period,
                                                 'omega_target': omega_target})
-    return GoalProfile(profile, period + PLAN_HOLD, period, math.nan)
+    return GoalProfile(profile, period, math.nan)
 
 
 __all__ = ['AT_REST', 'GOAL_PROFILES', 'GoalProfile', 'goal_profile']

@@ -398,8 +398,8 @@ def trajectory_times(profile: Profile, end: float, max_interval: float) -> np.nd
     return np.array(times)
 
 
-def profile_points(profile: Profile, times: Sequence[float]) -> tuple[TrajectoryPoint, ...]:
-    """The points (w, w') of ``profile`` at ``times`` (s from its start), no positions.
+def profile_points(profile: Profile, times) -> tuple[TrajectoryPoint, ...]:
+    """The points (w, w') of ``profile`` at ``times`` (s from its start; an array), no positions.
 
     Between two such points the hub's w is the cubic through both ends' (w, w'): exact
     for a profile cubic between them (a planned spin-up at its spline's knots), and

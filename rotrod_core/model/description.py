@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 from xml.etree import ElementTree
 
+from rotrod_core.model.interface import ROTOR_FRAME
 from rotrod_core.model.params import FIELDS, RodParams
 
 ELEMENT = 'rotrod'
@@ -74,10 +75,15 @@ rad/s^2 (the paper's Eq. 26 peaks at 0.27; 0.5 bends Table 1's rod back by 0.34 
 
 @dataclass(frozen=True)
 class Description:
-    """What a robot description says of the rod: its parameters and the drive's limits."""
+    """What a robot description says of the rod: its parameters and the drive's limits.
+
+    ``disk_radius`` is the drawn disk's (m: the ``rotor`` link's cylinder), None if the
+    URDF draws none.
+    """
 
     params: RodParams
     limits: DriveLimits
+    disk_radius: float | None = None
 
 
 def _num(x) -> str:
@@ -166,7 +172,21 @@ def read_description(text: str) -> Description:
                                 for f in dataclasses.fields(DriveLimits)})
     except ValueError as exc:
         raise DescriptionError(f'robot_description: {where}: {exc}') from None
-    return Description(params, limits)
+    return Description(params, limits, _disk_radius(root))
+
+
+def _disk_radius(root) -> float | None:
+    """The radius of the ``rotor`` link's drawn cylinder, m (None: none, or unreadable)."""
+    for link in root.iter('link'):
+        if link.get('name') == ROTOR_FRAME:
+            cylinder = link.find('visual/geometry/cylinder')
+            try:
+                radius = float(cylinder.get('radius')) if cylinder is not None else None
+            except (TypeError, ValueError):
+                return None
+            return radius if radius is not None and math.isfinite(radius) and radius > 0 \
+                else None
+    return None
 
 
 def differences(a: RodParams, b: RodParams) -> list[str]:

@@ -67,7 +67,7 @@ def run_simulator_and_logger(ros_processes, ros_node, ns: str, out, flush_period
     logger = ros_processes.start_console_script('rerun_logger', *ros_arguments(
         namespace=ns, params={'output': str(out), 'flush_period': flush_period,
                               'footer': footer}))
-    logger.wait_for_output('recording to', timeout=30)
+    logger.wait_for_output('subscribed to the simulator', timeout=30)
     ros_node.spin_until(lambda: all(ros_node.node.count_subscribers(f'{ns}/{topic}') >= 2
                                     for topic in TOPICS), 30, 'the logger subscribed')
     first = float(logger.wait_for_output(r'receiving: first joint state stamped ([0-9.]+) s',

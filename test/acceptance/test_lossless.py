@@ -42,7 +42,7 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
     out = tmp_path / 'fast.rrd'
     logger = ros_processes.start_console_script('rerun_logger', *ros_arguments(
         namespace=ns, params={'output': str(out)}), name='logger')
-    logger.wait_for_output('recording to', timeout=30)
+    logger.wait_for_output('subscribed to the simulator', timeout=30)
     sim = ros_processes.start_console_script('simulator', *ros_arguments(
         namespace=ns, params={'real_time_factor': 0.0, 'drive': 'torque', 'hub_inertia': J,
                               'deflection_limit': 0.01,

@@ -84,7 +84,7 @@ def test_soak_at_1khz_memory_and_simulated_time_hold(ros_processes, ros_node, re
     sim.wait_for_output('ready', timeout=30)
     logger = ros_processes.start_console_script('rerun_logger', *ros_arguments(
         namespace=ns, params={'output': str(out)}))
-    logger.wait_for_output('recording to', timeout=30)
+    logger.wait_for_output('subscribed to the simulator', timeout=30)
     ros_processes.start_console_script('profile_publisher', *ros_arguments(
         namespace=ns, params={'profile': 'eq26', 'omega_target': OMEGA_MAX, 'loop': True}))
     ros_node.spin_until(lambda: len(joint) > 10, 30, 'joint states')

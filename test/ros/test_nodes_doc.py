@@ -105,13 +105,16 @@ def test_each_node_declares_its_specs_and_creates_its_interfaces(executable, con
         ns = node.get_namespace().rstrip('/')
         # topics by their resolved name, services (rclpy keeps it) by the one given
         want = {i.name if i.kind == 'srv' or i.name.startswith('/') else f'{ns}/{i.name}'
-                for i in module.INTERFACES if i.kind != 'action'}
+                for i in module.INTERFACES if i.kind not in ('action', 'action client')}
         made = {x.topic_name for x in (*node.publishers, *node.subscriptions)} | {
             x.srv_name for x in node.services}
         assert {m for m in made if not builtin(m)} == want
         from rclpy.action import ActionServer
         actions = [w._action_type for w in node.waitables if isinstance(w, ActionServer)]
         assert actions == [i.type for i in module.INTERFACES if i.kind == 'action']
+        from rclpy.action import ActionClient
+        clients = [w._action_type for w in node.waitables if isinstance(w, ActionClient)]
+        assert clients == [i.type for i in module.INTERFACES if i.kind == 'action client']
     finally:
         node.destroy_node()
 

@@ -76,8 +76,7 @@ def test_a_rectangular_section_is_built_from_its_two_sizes():
 
 def test_table1_file_holds_the_papers_parameters_and_known_names():
     doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
-    assert list(doc) == ['/**/rotrod_simulator', '/**/rotrod_profile_publisher',
-                         '/**/rotrod_rerun_logger']
+    assert list(doc) == ['/**/rotrod_simulator']
     values = doc['/**/rotrod_simulator']['ros__parameters']
     assert set(values) <= set(SPECS_BY_NAME)
     assert (values['mass'], values['rod_length'], values['rod_diameter'],
@@ -86,27 +85,24 @@ def test_table1_file_holds_the_papers_parameters_and_known_names():
     build_settings({**defaults(), **values})
 
 
-def test_the_rerun_logger_draws_the_simulators_rod():
-    """config/table1.yaml gives the logger the simulator's rod geometry and critical
-    deflection, value for value (the recording's 3D scene and circle are that rod's)."""
+@pytest.mark.parametrize('name', sorted(p.name for p in (ROOT / 'config').glob('*.yaml')))
+def test_the_rod_is_given_to_the_simulator_alone(name):
+    """No parameters file repeats a rod parameter for another node: they read the rod
+    from the simulator's robot_description (issue #35)."""
+    doc = yaml.safe_load((ROOT / 'config' / name).read_text()) or {}
+    rod = {s.name for s in ROD_SPECS}
+    for key, body in doc.items():
+        if key.endswith('rotrod_simulator') or not isinstance(body, dict):
+            continue
+        given = set((body.get('ros__parameters') or {}))
+        assert not given & rod, f'{name}: {key} repeats {sorted(given & rod)}'
+
+
+def test_the_drawn_parameters_are_the_simulators():
+    """The logger's drawn parameters have the simulator's defaults, units and ranges."""
     from rotrod_ros.rerun_logger import DRAWN, PARAMETERS
-    doc = yaml.safe_load((ROOT / 'config' / 'table1.yaml').read_text())
-    simulator = doc['/**/rotrod_simulator']['ros__parameters']
-    logger = doc['/**/rotrod_rerun_logger']['ros__parameters']
-    assert logger == {k: v for k, v in simulator.items() if k in DRAWN}
     specs = {s.name: s for s in PARAMETERS}
-    for name in DRAWN:            # the simulator's defaults, units and ranges
+    for name in DRAWN:
         sim = SPECS_BY_NAME[name]
         assert (specs[name].default, specs[name].unit, specs[name].bounds) == (
             sim.default, sim.unit, sim.bounds)
-
-
-@pytest.mark.parametrize('name', ['table1.yaml', 'real_rig.yaml'])
-def test_the_profile_publisher_plans_for_the_simulators_rod(name):
-    """Each rod file gives the profile publisher the simulator's rod, deflection limit
-    and acceleration bound, value for value (its planned spin-up is for that rod)."""
-    doc = yaml.safe_load((ROOT / 'config' / name).read_text())
-    simulator = doc['/**/rotrod_simulator']['ros__parameters']
-    publisher = doc['/**/rotrod_profile_publisher']['ros__parameters']
-    shared = {s.name for s in ROD_SPECS} | {'deflection_limit', 'max_angular_acceleration'}
-    assert {k: v for k, v in simulator.items() if k in shared} == publisher

@@ -16,8 +16,12 @@ pytestmark = pytest.mark.ros
 
 def test_logger_serves_on_localhost_only(ros_processes, tmp_path):
     port = 19000 + (hash(str(tmp_path)) % 1000)
+    # every drawn parameter given: it records without a simulator's description
+    drawn = {'mass': 0.3, 'rod_length': 0.3, 'rod_diameter': 0.003, 'eccentricity': 0.1,
+             'deflection_limit': 0.003}
     logger = ros_processes.start_console_script('rerun_logger', *ros_arguments(
-        params={'output': str(tmp_path / 'x.rrd'), 'serve': True, 'serve_port': port}))
+        params={'output': str(tmp_path / 'x.rrd'), 'serve': True, 'serve_port': port,
+                **drawn}))
     logger.wait_for_output('serving at', timeout=30)
     listening = set()
     for line in open('/proc/net/tcp').read().splitlines()[1:]:
@@ -37,7 +41,7 @@ def test_a_halt_and_its_reset_are_events_in_the_recording(ros_processes, ros_nod
     out = tmp_path / 'halt.rrd'
     logger = ros_processes.start_console_script('rerun_logger', *ros_arguments(
         namespace=ns, params={'output': str(out)}), name='logger')
-    logger.wait_for_output('recording to', timeout=30)
+    logger.wait_for_output('subscribed to the simulator', timeout=30)
     sim = start_simulator(ros_processes, ns, drive='torque', hub_inertia=0.0624,
                           max_omega=1.0)
     torque = ros_node.node.create_publisher(Float64, f'{ns}/cmd/torque', 10)

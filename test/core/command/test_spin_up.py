@@ -1,4 +1,4 @@
-"""The profile of a SpinUp goal: what is streamed, and why a goal is refused."""
+"""The profile of a SpinUp goal: what the hub is to follow, and why a goal is refused."""
 
 import math
 
@@ -6,7 +6,6 @@ import pytest
 from reference import W0
 
 from rotrod_core import RodParams
-from rotrod_core.command.registry import PLAN_HOLD, PLAN_LEAD
 from rotrod_core.command.spin_up import goal_profile
 
 
@@ -14,7 +13,7 @@ def test_a_planned_goal_is_the_planners_spin_up_from_the_current_speed():
     g = goal_profile('planned', 0.5, 2.0, max_angular_acceleration=0.5)
     p = g.profile
     assert p.omega(0.0) == 0.5 and p.omega(g.change_time) == pytest.approx(2.0, abs=1e-12)
-    assert p.t_start == PLAN_LEAD and g.stream_time == g.change_time + PLAN_HOLD
+    assert p.t_start == 0 and g.change_time == p.duration        # at once, no lead
     assert 0 < g.predicted_residual <= 2.5e-7                 # the default residual bound
     assert p.max_angular_acceleration <= 0.9 * 0.5 * (1 + 1e-9)
 
@@ -26,9 +25,9 @@ def test_a_robust_goal_predicts_its_bands_residual():
 
 
 @pytest.mark.parametrize('name, T', [('eq26', 15.0), ('ramp', 10.0)])
-def test_eq26_and_ramp_stream_their_spin_up_to_the_target_and_hold_it(name, T):
+def test_eq26_and_ramp_spin_up_to_the_target_in_their_duration(name, T):
     g = goal_profile(name, 0.0, 2.0, duration=T)
-    assert g.change_time == T and g.stream_time == T + PLAN_HOLD
+    assert g.change_time == T
     assert g.profile.omega(0.0) == 0.0
     assert g.profile.omega(T) == pytest.approx(2.0, abs=1e-12)
     assert g.profile.omega(T / 2) == pytest.approx(1.0, abs=1e-12)   # both: w(T/2) = W/2

@@ -26,9 +26,9 @@ RODS = (RodParams(),
 @pytest.mark.parametrize('params', RODS)
 def test_the_rod_and_limits_read_back_are_the_ones_written_bit_for_bit(params):
     limits = DriveLimits(0.45, 12.5, 3.0, 0.0025)
-    got = read_description(urdf_text(params, limits=limits))
+    got = read_description(urdf_text(params, limits=limits, disk_radius=0.21))
     assert got.params == params and differences(got.params, params) == []
-    assert got.limits == limits
+    assert got.limits == limits and got.disk_radius == 0.21
 
 
 def test_the_default_limits_are_the_simulator_s_defaults():
