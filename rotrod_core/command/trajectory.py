@@ -334,7 +334,7 @@ class HubTrajectory(Profile):
         """w, rad/s."""
         tt = np.asarray(t, dtype=float)
         w = np.where(tt < 0, self.start.velocity, self._omega(self._clipped(t)))
-        return _out(t, np.where(tt > self.end_time, self.final_velocity, w))
+        return _out(t, np.where(tt >= self.end_time, self.final_velocity, w))
 
     @_evaluation
     def omega_dot(self, t):

@@ -171,12 +171,13 @@ def test_a_plan_is_exactly_at_its_end_speeds_outside_the_change(planned):
 
 
 def test_the_reports_planned_row_is_config_planned_yaml():
-    """docs/reproduce.md's robust row plans what config/planned.yaml streams."""
+    """docs/reproduce.md's robust row plans what config/planned.yaml sends."""
     import yaml
 
     from rotrod_core.reporting.spin_ups import PLANNED
     doc = yaml.safe_load((ROOT / 'config' / 'planned.yaml').read_text())
-    streamed = {**doc['/**']['ros__parameters'],
+    bound = doc['/**/rotrod_simulator']['ros__parameters']['max_angular_acceleration']
+    streamed = {'max_angular_acceleration': bound,      # the simulator's, as it plans
                 **doc['/**/rotrod_profile_publisher']['ros__parameters']}
     assert streamed.pop('profile') == 'planned'
     label, options = PLANNED[-1]
