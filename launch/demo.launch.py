@@ -38,8 +38,11 @@ def generate_launch_description():
              parameters=params, output='screen'),
         Node(package='rotrod', executable='profile_publisher', name='rotrod_profile_publisher',
              parameters=params, output='screen'),
+        # the simulator publishes robot_description itself (the rod the other nodes read);
+        # robot_state_publisher's own publication of it is moved out of its way
         Node(package='robot_state_publisher', executable='robot_state_publisher',
              name='robot_state_publisher', output='screen',
              parameters=[{'robot_description': robot_description,
-                          'use_sim_time': LaunchConfiguration('use_sim_time')}]),
+                          'use_sim_time': LaunchConfiguration('use_sim_time')}],
+             remappings=[('robot_description', 'robot_state_publisher/robot_description')]),
     ])

@@ -115,8 +115,9 @@ PARAMETERS = (
     Spec('arrival_timeout', 30.0, 'SpinUp: time after the stream\'s end, of the node '
          'clock, within which w must reach the target (else the goal is aborted)', 's',
          0.0, 1e6),
-    Spec('realtime_priority', 50, 'SCHED_FIFO priority of the node\'s thread, so the '
-         'stream stays punctual on a busy machine, 1..99; 0 = ordinary scheduling. Needs '
+    Spec('realtime_priority', 50, 'send_as stream: SCHED_FIFO priority of the node\'s '
+         'thread, so the stream stays punctual on a busy machine, 1..99; 0 = ordinary '
+         'scheduling. Needs '
          'root or CAP_SYS_NICE; refused with a warning otherwise', '', 0,
          scheduling.MAX_PRIORITY),
 )
@@ -351,8 +352,11 @@ class ProfilePublisher(Node):
                 return
 
     def schedule(self) -> None:
-        """Run the calling (executor) thread at ``realtime_priority``, or say why not."""
-        if self.realtime_priority:
+        """Run the calling (executor) thread at ``realtime_priority``, or say why not.
+
+        A stream only: a trajectory's timing is the simulator's.
+        """
+        if self.realtime_priority and self.mode == 'stream':
             scheduling.run_current_thread_at(self.realtime_priority, self.get_logger(),
                                              'streaming')
 

@@ -11,13 +11,11 @@ the planner's own argument names, for a given rod. This module sits above
 :mod:`~rotrod_core.command.profiles` and :mod:`~rotrod_core.command.planner` (which
 returns a profile), so neither imports the other's registry.
 
-The acceleration contract with the simulator (docs/planner.md, "Streaming a plan"): a
-planned profile stays within :data:`PLANNED_ACCELERATION_FRACTION` of
-``max_angular_acceleration``, whose default is the simulator's
-(:data:`~rotrod_core.command.shaping.DEFAULT_MAX_ANGULAR_ACCELERATION`); the same value
-given to both nodes (one params file, ``config/planned.yaml``) lets the plan through
-unchanged. 0 plans without a bound, and :func:`describe` says what the simulator must
-then allow.
+The acceleration contract with the simulator (docs/planner.md): a planned profile stays
+within :data:`PLANNED_ACCELERATION_FRACTION` of ``max_angular_acceleration``, whose
+default is the simulator's (:data:`~rotrod_core.command.shaping.DEFAULT_MAX_ANGULAR_ACCELERATION`);
+the profile publisher reads the simulator's from its robot_description. 0 plans
+without a bound, and :func:`describe` says what the simulator must then allow.
 """
 
 from __future__ import annotations
