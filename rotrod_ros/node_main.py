@@ -11,6 +11,7 @@ import time
 from collections.abc import Callable
 
 import rclpy
+from rclpy.action import ActionClient, ActionServer
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
@@ -80,6 +81,25 @@ def _wake_on_signals(node) -> None:
     threading.Thread(target=watch, name='signal_wakeup', daemon=True).start()
 
 
+def _destroy_node(node) -> None:
+    """``node.destroy_node()``, with the node's action servers and clients first.
+
+    rclpy's destroy_node destroys the node's publishers, subscriptions, services,
+    clients, timers and guard conditions, not its other waitables: an ActionServer or
+    ActionClient left alive holds the rcl node, which is then never finalized. Its
+    Fast DDS participant, and rmw's graph listener thread that only that finalization
+    stops, would outlive the interpreter: at exit, Fast DDS's static
+    DomainParticipantFactory deletes the participant while the listener thread still
+    waits on its conditions and takes from its reader, a use after free that now and
+    then corrupts the heap (seen: SIGABRT after the last log line,
+    ``malloc_consolidate(): unaligned fastbin chunk detected``).
+    """
+    for waitable in list(node.waitables):
+        if isinstance(waitable, (ActionServer, ActionClient)):
+            waitable.destroy()
+    node.destroy_node()
+
+
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *,
         until: Callable | None = None, started: Callable | None = None,
@@ -143,7 +163,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         if node is not None:
             if finished:
                 finished(node)
-            node.destroy_node()
+            _destroy_node(node)
         try:
             rclpy.try_shutdown()
         except RuntimeError as exc:      # rclpy's signal handler shut it down meanwhile
