@@ -1,9 +1,11 @@
 """A fleet of rods on a full ROS 2 install: ``ros2 launch rotrod fleet.launch.py rods:=10``.
 
-Starts ``rods`` simulators (default 10) in the namespaces rod0 .. rod{rods-1}, each with
-config/table1.yaml and config/fleet.yaml (real time, markers off), and with
-``profiles:=true`` a profile publisher per rod streaming Eq. 26 in a loop. The same
-fleet without ``launch``: ``python -m rotrod_ros.fleet --rods 10 [--profile]``.
+One simulator holds ``rods`` rods (default 10) as one world, their interfaces in the
+namespaces rod0 .. rod{rods-1}, with config/table1.yaml and config/fleet.yaml (real
+time, markers off); ``processes:=true`` starts a simulator process per rod instead (the
+layout before worlds); with ``profiles:=true`` a profile publisher per rod streams Eq. 26
+in a loop. The same fleet without ``launch``: ``python -m rotrod_ros.fleet --rods 10
+[--processes] [--profile]``.
 """
 
 import os
@@ -16,17 +18,24 @@ from launch_ros.actions import Node
 
 
 def rods(context):
-    """A simulator (and a profile publisher if asked) per rod namespace."""
+    """The world's simulator (or one per rod), and a profile publisher per rod if asked."""
     share = get_package_share_directory('rotrod')
     params = [os.path.join(share, 'config', name) for name in ('table1.yaml', 'fleet.yaml')]
     count = int(LaunchConfiguration('rods').perform(context))
     profiles = LaunchConfiguration('profiles').perform(context).lower() == 'true'
+    processes = LaunchConfiguration('processes').perform(context).lower() == 'true'
     actions = []
+    if not processes:
+        actions.append(Node(package='rotrod', executable='simulator',
+                            name='rotrod_simulator', output='screen',
+                            parameters=[*params, {'rods': count,
+                                                  'max_rods': max(count, 128)}]))
     for k in range(count):
         ns = f'rod{k}'
-        actions.append(Node(package='rotrod', executable='simulator', namespace=ns,
-                            name='rotrod_simulator', output='screen',
-                            parameters=[*params, {'frame_prefix': f'{ns}/'}]))
+        if processes:
+            actions.append(Node(package='rotrod', executable='simulator', namespace=ns,
+                                name='rotrod_simulator', output='screen',
+                                parameters=[*params, {'frame_prefix': f'{ns}/'}]))
         if profiles:
             actions.append(Node(package='rotrod', executable='profile_publisher',
                                 namespace=ns, name='rotrod_profile_publisher',
@@ -35,9 +44,11 @@ def rods(context):
 
 
 def generate_launch_description():
-    """The fleet: launch arguments rods (10) and profiles (false)."""
+    """The fleet: launch arguments rods (10), processes (false) and profiles (false)."""
     return LaunchDescription([
         DeclareLaunchArgument('rods', default_value='10', description='number of rods'),
+        DeclareLaunchArgument('processes', default_value='false',
+                              description='a simulator process per rod instead of one world'),
         DeclareLaunchArgument('profiles', default_value='false',
                               description='a profile publisher per rod'),
         OpaqueFunction(function=rods),

@@ -1,13 +1,16 @@
-"""A fleet of rods: N simulators in the namespaces rod0 .. rod{N-1}, from one command.
+"""A fleet of rods: N rods in the namespaces rod0 .. rod{N-1}, from one command.
 
-    python -m rotrod_ros.fleet --rods 10 [--profile] [--duration S] [--params-file F]...
+    python -m rotrod_ros.fleet --rods 10 [--processes] [--profile] [--duration S] ...
 
-Every simulator gets config/table1.yaml, config/fleet.yaml (real time, markers off),
-then the given files, and its namespace as its frames' prefix (``rod3/rotor``, ...);
-with ``--profile`` each rod also gets its own profile publisher streaming
+By default one simulator process holds them all, a world of rods (``rods:=N``: their
+interfaces under ``rodK/``, frames ``rodK/rotor``, stepped as one batch); with
+``--processes`` each rod is a simulator process of its own in its namespace (the layout
+before worlds, kept to compare). Every simulator gets config/table1.yaml,
+config/fleet.yaml (real time, markers off), then the given files. With ``--profile``
+each rod also gets its own profile publisher in its namespace, streaming
 config/fleet.yaml's profile (Eq. 26, looped) on its ``cmd/omega``. The processes log to
-``<log-dir>/<namespace>_<node>.log``; the fleet runs until ``--duration`` has passed or
-Ctrl-C, then stops them all. A full ROS install does the same with ``ros2 launch rotrod
+``<log-dir>/<name>.log``; the fleet runs until ``--duration`` has passed or Ctrl-C,
+then stops them all. A full ROS install does the same with ``ros2 launch rotrod
 fleet.launch.py rods:=10`` (launch/fleet.launch.py).
 
 DDS stays on this machine unless the caller set otherwise
@@ -38,16 +41,21 @@ def namespaces(rods: int) -> list[str]:
     return [f'/rod{k}' for k in range(rods)]
 
 
-def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict[str, list[str]]:
-    """The commands (``<ns>_<node>`` -> argv) that start the fleet."""
+def fleet_commands(rods: int, *, profile: bool = False, params_files=(),
+                   processes: bool = False) -> dict[str, list[str]]:
+    """The commands (``<name>`` -> argv) that start the fleet: one world, or ``processes``."""
     files = []
     for f in (*(str(share_file(p)) for p in PARAM_FILES), *map(str, params_files)):
         files += ['--params-file', f]
     cmds = {}
+    if not processes:
+        cmds['world_simulator'] = [*executable('simulator'), '--ros-args', *files,
+                                   '-p', f'rods:={rods}', '-p', f'max_rods:={max(rods, 128)}']
     for ns in namespaces(rods):
-        cmds[f'{ns[1:]}_simulator'] = [*executable('simulator'), '--ros-args',
-                                       '-r', f'__ns:={ns}', *files,
-                                       '-p', f'frame_prefix:={ns[1:]}/']
+        if processes:
+            cmds[f'{ns[1:]}_simulator'] = [*executable('simulator'), '--ros-args',
+                                           '-r', f'__ns:={ns}', *files,
+                                           '-p', f'frame_prefix:={ns[1:]}/']
         if profile:
             cmds[f'{ns[1:]}_profile_publisher'] = [
                 *executable('profile_publisher'), '--ros-args', '-r', f'__ns:={ns}', *files]
@@ -55,10 +63,12 @@ def fleet_commands(rods: int, *, profile: bool = False, params_files=()) -> dict
 
 
 def start(rods: int, log_dir: Path, *, profile: bool = False, params_files=(),
-          env: dict | None = None, ready_timeout: float = 60.0) -> Processes:
+          env: dict | None = None, ready_timeout: float = 60.0,
+          processes: bool = False) -> Processes:
     """Start the fleet and wait until every simulator is ready; return the processes."""
     procs = Processes(Path(log_dir), ros_environment(dict(os.environ) if env is None else env))
-    cmds = fleet_commands(rods, profile=profile, params_files=params_files)
+    cmds = fleet_commands(rods, profile=profile, params_files=params_files,
+                          processes=processes)
     try:
         for name, cmd in cmds.items():
             if name.endswith('_simulator'):
@@ -80,6 +90,9 @@ def main(argv: list | None = None) -> int:
     parser = argparse.ArgumentParser(prog='python -m rotrod_ros.fleet',
                                      description=__doc__.split('\n')[0])
     parser.add_argument('--rods', type=int, default=10, help='number of rods (default 10)')
+    parser.add_argument('--processes', action='store_true',
+                        help='a simulator process per rod (the layout before worlds), '
+                             'instead of one world')
     parser.add_argument('--profile', action='store_true',
                         help="a profile publisher per rod (config/fleet.yaml's profile)")
     parser.add_argument('--duration', type=float, default=None,
@@ -102,11 +115,12 @@ def main(argv: list | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     try:
         procs = start(args.rods, args.log_dir, profile=args.profile,
-                      params_files=args.params_file)
+                      params_files=args.params_file, processes=args.processes)
     except (DemoError, FileNotFoundError) as exc:
         print(f'fleet: {exc}', file=sys.stderr)
         return 1
-    print(f'fleet: {args.rods} rods running in /rod0 .. /rod{args.rods - 1} '
+    layout = 'a process each' if args.processes else 'one world process'
+    print(f'fleet: {args.rods} rods running in /rod0 .. /rod{args.rods - 1}, {layout} '
           f'(ROS_DOMAIN_ID={procs.env["ROS_DOMAIN_ID"]}); logs in {args.log_dir}',
           flush=True)
     deadline = None if args.duration is None else time.monotonic() + args.duration

@@ -155,14 +155,28 @@ def clock(t: Time) -> Clock:
     return Clock(clock=t)
 
 
-def diagnostics(t: Time, name: str, hardware_id: str, level: int, message: str,
-                values: Iterable[tuple]) -> DiagnosticArray:
-    """A DiagnosticArray with one status; values are written as text (floats to 6 digits)."""
+def diagnostic_status(name: str, hardware_id: str, level: int, message: str,
+                      values: Iterable[tuple]) -> DiagnosticStatus:
+    """A DiagnosticStatus; values are written as text (floats to 6 digits)."""
     kv = [KeyValue(key=str(k), value=f'{v:.6g}' if isinstance(v, float) else str(v))
           for k, v in values]
-    status = DiagnosticStatus(level=bytes([level]), name=name, message=message,
-                              hardware_id=hardware_id, values=kv)
-    return DiagnosticArray(header=header(t), status=[status])
+    return DiagnosticStatus(level=bytes([level]), name=name, message=message,
+                            hardware_id=hardware_id, values=kv)
+
+
+def diagnostics(t: Time, name: str, hardware_id: str, level: int, message: str,
+                values: Iterable[tuple]) -> DiagnosticArray:
+    """A DiagnosticArray with one status (see :func:`diagnostic_status`)."""
+    return diagnostics_array(t, [(name, hardware_id, level, message, values)])
+
+
+def diagnostics_array(t: Time, statuses: Iterable[tuple]) -> DiagnosticArray:
+    """A DiagnosticArray of several statuses.
+
+    Each (name, hardware_id, level, message, values) as :func:`diagnostic_status` takes.
+    """
+    return DiagnosticArray(header=header(t),
+                           status=[diagnostic_status(*status) for status in statuses])
 
 
 _TRAIL_POINTS: dict = {}

@@ -68,6 +68,9 @@ class NodeSettings(PublicationSettings):
     deflection_noise: float = 0.0
     noise_seed: int = 0
     wait_for_subscribers: int = -1
+    rods: int = 1
+    max_rods: int = 128
+    max_steps_per_request: int = 1_000_000_000
 
     def subscriber_wait(self) -> tuple[int, float]:
         """Subscriptions wanted on each sample topic before simulated time starts.
@@ -181,6 +184,17 @@ NODE_SPECS = (
          'lockstep stepping (~/step_simulation, ~/simulate_steps) or a later play: a '
          'logger or a controller connects before time starts. Stamps are then simulated '
          'time, published on /clock', read_only=True),
+    Spec('rods', _NODE.rods, 'how many rods the simulator starts with: 1 (default) = one '
+         'rod with the plain names (cmd/omega, joint_states, ...); N > 1 = N copies of the '
+         'rod of these parameters, named rod0 ... rod{N-1}, their interfaces and frames '
+         'under rodK/; more come and go through ~/spawn_entity and ~/delete_entity', '',
+         1, 10000, read_only=True),
+    Spec('max_rods', _NODE.max_rods, 'most rods the world holds: a spawn beyond is refused',
+         '', 1, 10000),
+    Spec('max_steps_per_request', _NODE.max_steps_per_request, 'most physics steps one '
+         'StepSimulation or SimulateSteps request may ask for (beyond: refused with '
+         'RESULT_OPERATION_FAILED); a reset, a play, a stop or a cancel ends a running '
+         'request at the next publication instant anyway', '', 1, 2**62),
     Spec('realtime_priority', _NODE.realtime_priority,
          'SCHED_FIFO priority of the physics thread while paced (real_time_factor > 0), '
          '1..99; 0 = ordinary scheduling. Needs root or CAP_SYS_NICE; refused with a '
@@ -232,6 +246,8 @@ def build_settings(values: Mapping[str, Any]) -> tuple[EngineConfig, NodeSetting
     if node.publish_rate > engine.physics_rate:
         raise ValueError(f'publish_rate {node.publish_rate:g} Hz exceeds physics_rate '
                          f'{engine.physics_rate:g} Hz: there would be nothing new to publish')
+    if node.rods > node.max_rods:
+        raise ValueError(f'rods {node.rods} exceeds max_rods {node.max_rods}')
     return engine, node
 
 
@@ -265,10 +281,14 @@ class ParameterValues:
         return {**self.values, **{name: value for name, value in changes.items()
                                   if name in SPECS_BY_NAME}}
 
-    def check(self, changes: Mapping[str, Any]) -> None:
-        """Check the values in use with ``changes`` as a whole (ValueError); none is taken."""
+    def check(self, changes: Mapping[str, Any]) -> tuple[EngineConfig, NodeSettings]:
+        """Check the values in use with ``changes`` as a whole (ValueError); none is taken.
+
+        Returns the engine config and node settings they would make.
+        """
         values = self._with(changes)
         self._checked = (values, *build_settings(values))
+        return self.checked
 
     def take(self, changes: Mapping[str, Any]) -> tuple[EngineConfig, NodeSettings]:
         """Put the values with ``changes`` in use; their engine config and node settings."""

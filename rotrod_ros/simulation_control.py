@@ -2,8 +2,9 @@
 
 What Gazebo (ros_gz_sim), Isaac Sim and O3DE serve, served by the rotrod simulator
 under its own name (``~/``, like Gazebo's ``/gzserver/``): features, the simulation
-state (playing, paused, stopped), stepping while paused (a service and an action),
-reset by scope, and the ground-truth state of the tip mass. The stepping itself is
+state (playing, paused, stopped), stepping while paused (a service and an action) and
+reset by scope, for the whole world; the entities (spawn, delete, their states) are
+:mod:`rotrod_ros.entities`'. The stepping itself is
 the physics thread's (:meth:`rotrod_core.live.loop.RealTimeLoop.request_steps`, whose
 docstring states the lockstep rule); this module turns requests into loop calls and
 results into the standard's codes. docs/simulation_control.md describes each call.
@@ -23,9 +24,8 @@ from rclpy.action import CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.task import Future
 from simulation_interfaces.action import SimulateSteps
-from simulation_interfaces.msg import EntityState, Result, SimulationState, SimulatorFeatures
+from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import (
-    GetEntityState,
     GetSimulationState,
     GetSimulatorFeatures,
     ResetSimulation,
@@ -41,27 +41,37 @@ from rotrod_core.live.lockstep import (
 )
 from rotrod_core.live.loop import RealTimeLoop
 
-from . import messages
 from .interfaces import action, srv
 
-TIP_ENTITY = 'tip'
-"""The one entity of GetEntityState: the tip mass (the URDF's link ``tip``)."""
 FEATURES = (
+    SimulatorFeatures.SPAWNING,
+    SimulatorFeatures.DELETING,
+    SimulatorFeatures.ENTITY_CATEGORIES,
+    SimulatorFeatures.SPAWNING_RESOURCE_STRING,
     SimulatorFeatures.ENTITY_STATE_GETTING,
+    SimulatorFeatures.ENTITY_STATE_SETTING,
+    SimulatorFeatures.ENTITY_INFO_GETTING,
+    SimulatorFeatures.SPAWNABLES,
     SimulatorFeatures.SIMULATION_RESET,
     SimulatorFeatures.SIMULATION_RESET_TIME,
     SimulatorFeatures.SIMULATION_RESET_STATE,
+    SimulatorFeatures.SIMULATION_RESET_SPAWNED,
     SimulatorFeatures.SIMULATION_STATE_GETTING,
     SimulatorFeatures.SIMULATION_STATE_SETTING,
     SimulatorFeatures.SIMULATION_STATE_PAUSE,
     SimulatorFeatures.STEP_SIMULATION_SINGLE,
     SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
     SimulatorFeatures.STEP_SIMULATION_ACTION,
+    SimulatorFeatures.SPAWNING_ENTITIES,
 )
-"""What works, as GetSimulatorFeatures lists it (SCOPE_SPAWNED, spawning, worlds and
-entity setting do not: there is one rod, nothing to spawn)."""
-SUPPORTED_SCOPES = ResetSimulation.Request.SCOPE_TIME | ResetSimulation.Request.SCOPE_STATE
-"""The reset scope bits served alone or together (SCOPE_DEFAULT and SCOPE_ALL: both)."""
+"""What works, as GetSimulatorFeatures lists it (not: tags, bounds, named poses, entity
+info setting, worlds: there is one world, always loaded)."""
+SPAWN_FORMATS = ('urdf',)
+"""What SpawnEntity reads: a URDF with rotrod's <rotrod> element (rotrod urdf)."""
+SUPPORTED_SCOPES = (ResetSimulation.Request.SCOPE_TIME | ResetSimulation.Request.SCOPE_STATE
+                    | ResetSimulation.Request.SCOPE_SPAWNED)
+"""The reset scope bits served alone or together (SCOPE_DEFAULT: time and state;
+SCOPE_ALL: all three)."""
 STATE_NAMES = {SimulationState.STATE_STOPPED: 'stopped', SimulationState.STATE_PLAYING:
                'playing', SimulationState.STATE_PAUSED: 'paused',
                SimulationState.STATE_QUITTING: 'quitting',
@@ -87,14 +97,10 @@ INTERFACES = (
         'Playing: RESULT_INCORRECT_STATE; steps 0 or halted: RESULT_OPERATION_FAILED'),
     srv('~/reset_simulation', ResetSimulation,
         'simulation_interfaces: scope bits SCOPE_TIME (simulated time to 0), SCOPE_STATE '
-        '(the initial state; clears a halt); SCOPE_DEFAULT and SCOPE_ALL both: the same '
-        'steps and commands then replay bit for bit. Other bits: '
-        'RESULT_FEATURE_UNSUPPORTED. The play/pause state is kept'),
-    srv('~/get_entity_state', GetEntityState,
-        "simulation_interfaces: entity 'tip': the mass's ground-truth pose m, twist m/s "
-        "and rad/s, acceleration m/s^2 and rad/s^2 in frame 'world' (orientation and "
-        "angular motion: the rotor's, about z), stamped at the simulated time; another "
-        'name: RESULT_NOT_FOUND'),
+        '(every rod to its initial state; clears a halt), SCOPE_SPAWNED (the spawned rods '
+        'removed); SCOPE_DEFAULT time and state, SCOPE_ALL all three: the same steps and '
+        'commands then replay bit for bit. Other bits: RESULT_FEATURE_UNSUPPORTED. The '
+        'play/pause state is kept; a step request being served ends'),
     action('~/simulate_steps', SimulateSteps,
            'simulation_interfaces: as ~/step_simulation, with feedback (completed and '
            'remaining steps) after each run of steps up to a publication, and cancel '
@@ -122,10 +128,14 @@ class SimulationControl:
     """
 
     def __init__(self, node, loop: RealTimeLoop, reset: Callable[[bool, bool], tuple],
-                 world_frame: str, take_commands: Callable[[], int] = lambda: 0) -> None:
+                 world_frame: str, take_commands: Callable[[], int] = lambda: 0, *,
+                 remove_spawned: Callable[[], list] = lambda: [],
+                 max_steps: Callable[[], int] = lambda: 2**63) -> None:
         self.loop = loop
         self._take_commands = take_commands
         self._reset = reset
+        self._remove_spawned = remove_spawned
+        self._max_steps = max_steps
         self._world_frame = world_frame
         self._logger = node.get_logger()
         # an awaiting callback resumes when the executor wakes: the loop's thread
@@ -144,7 +154,6 @@ class SimulationControl:
             '~/set_simulation_state': self.set_state,
             '~/step_simulation': self.step,
             '~/reset_simulation': self.reset,
-            '~/get_entity_state': self.get_entity_state,
             '~/simulate_steps': {'execute_callback': self.simulate_steps,
                                  'cancel_callback': lambda goal_handle: CancelResponse.ACCEPT},
         }
@@ -160,9 +169,10 @@ class SimulationControl:
     def get_features(self, request, response):
         """GetSimulatorFeatures: :data:`FEATURES`."""
         response.features = SimulatorFeatures(
-            features=list(FEATURES), spawn_formats=[],
-            custom_info='rotrod: a point mass on a flexible rod on a rotating disk; one '
-                        "entity, 'tip'; one step = 1/physics_rate s; "
+            features=list(FEATURES), spawn_formats=list(SPAWN_FORMATS),
+            custom_info='rotrod: a world of rods, each a point mass on a flexible rod on a '
+                        'rotating disk; entities: each rod, its hub and its tip; spawn '
+                        'from the URDF of rotrod urdf; one step = 1/physics_rate s; '
                         'docs/simulation_control.md')
         return response
 
@@ -178,7 +188,7 @@ class SimulationControl:
         response.result = self.transition(target, now)
         if response.result.result == Result.RESULT_OK:
             self._logger.info(f'simulation state {STATE_NAMES[now]} -> {STATE_NAMES[target]} '
-                              f'at simulated time {self.loop.engine.time:.6f} s')
+                              f'at simulated time {self.loop.world.time:.6f} s')
         return response
 
     def transition(self, target: int, now: int) -> Result:
@@ -209,25 +219,29 @@ class SimulationControl:
 
     # ----------------------------------------------------------------- reset
     def reset(self, request, response):
-        """ResetSimulation: scopes TIME and STATE, alone or together (DEFAULT, ALL)."""
+        """ResetSimulation: scopes TIME, STATE and SPAWNED, alone or together."""
         scope = request.scope
         Req = ResetSimulation.Request
-        if scope in (Req.SCOPE_DEFAULT, Req.SCOPE_ALL):
+        if scope == Req.SCOPE_DEFAULT:
+            scope = Req.SCOPE_TIME | Req.SCOPE_STATE
+        elif scope == Req.SCOPE_ALL:
             scope = SUPPORTED_SCOPES
         if scope & ~SUPPORTED_SCOPES:
             response.result = _result(
                 Result.RESULT_FEATURE_UNSUPPORTED,
                 f'scope {request.scope}: only SCOPE_TIME ({Req.SCOPE_TIME}), SCOPE_STATE '
-                f'({Req.SCOPE_STATE}), both, SCOPE_DEFAULT or SCOPE_ALL (nothing is ever '
-                'spawned)')
+                f'({Req.SCOPE_STATE}), SCOPE_SPAWNED ({Req.SCOPE_SPAWNED}), together or '
+                'alone, SCOPE_DEFAULT or SCOPE_ALL')
             return response
         state, time = bool(scope & Req.SCOPE_STATE), bool(scope & Req.SCOPE_TIME)
+        removed = self._remove_spawned() if scope & Req.SCOPE_SPAWNED else []
         with self.loop.lock:
             was_halted, t = self._reset(state, time)
             if self.loop.paused:
                 self.stopped = state and time
-        message = (f'reset ({"state" if state else ""}{" and " if state and time else ""}'
-                   f'{"time" if time else ""}) at simulated time {t:.6f} s')
+        done = [w for w, on in (('state', state), ('time', time),
+                                (f'{len(removed)} spawned rod(s) removed', removed)) if on]
+        message = f'reset ({" and ".join(done) or "nothing"}) at simulated time {t:.6f} s'
         if was_halted:
             message += f' (cleared the halt: {was_halted})'
         self._logger.info(message)
@@ -240,6 +254,10 @@ class SimulationControl:
         if steps < 1:
             return _result(Result.RESULT_OPERATION_FAILED, f'steps must be at least 1, got '
                            f'{steps}')
+        if steps > self._max_steps():
+            return _result(Result.RESULT_OPERATION_FAILED, f'steps {steps} is more than one '
+                           f'request may ask for (max_steps_per_request {self._max_steps()}): '
+                           'ask in several')
         if not self.loop.paused:
             return _result(Result.RESULT_INCORRECT_STATE, 'the simulation is playing: pause '
                            'it (SetSimulationState STATE_PAUSED) to step')
@@ -300,32 +318,3 @@ class SimulationControl:
         else:
             goal_handle.abort()
         return SimulateSteps.Result(result=result)
-
-    # ----------------------------------------------------------------- entities
-    def get_entity_state(self, request, response):
-        """GetEntityState: the tip's ground truth in the world frame."""
-        if request.entity != TIP_ENTITY:
-            response.result = _result(Result.RESULT_NOT_FOUND, f'no entity {request.entity!r}: '
-                                      f"the one entity is {TIP_ENTITY!r}")
-            return response
-        with self.loop.lock:
-            motion = self.loop.engine.tip_motion()
-            stamp = self.loop.stamp_now()
-        response.state = entity_state(motion, messages.stamp(stamp), self._world_frame)
-        response.result = _result(Result.RESULT_OK)
-        return response
-
-
-def entity_state(motion, stamp, frame_id: str) -> EntityState:
-    """simulation_interfaces/EntityState of a :class:`~rotrod_core.model.kinematics.TipMotion`."""
-    msg = EntityState()
-    msg.header.stamp, msg.header.frame_id = stamp, frame_id
-    p, q = msg.pose.position, msg.pose.orientation
-    p.x, p.y, p.z = motion.position
-    q.x, q.y, q.z, q.w = messages.yaw_quaternion(motion.yaw)
-    for vector, values in ((msg.twist.linear, motion.velocity),
-                           (msg.twist.angular, motion.angular_velocity),
-                           (msg.acceleration.linear, motion.acceleration),
-                           (msg.acceleration.angular, motion.angular_acceleration)):
-        vector.x, vector.y, vector.z = values
-    return msg

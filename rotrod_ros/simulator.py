@@ -1,15 +1,19 @@
-"""rotrod simulator node: the coupled rod-and-hub model in real time over ROS 2 topics.
+"""rotrod simulator node: a world of rods on a rotating disk, in real time over ROS 2.
 
 Node ``rotrod_simulator``: topics and services below (INTERFACES), parameters after
-them (rotrod_ros.parameters); docs/nodes.md lists the same. Physics runs in a thread
-of its own at a fixed step, paced to the clock (real_time_factor; 0 = as fast as
-possible), at SCHED_FIFO realtime_priority where permitted: rotrod_core's RealTimeLoop
-(rotrod_core/live/loop.py) around a SimulationEngine. This node declares parameters
-(checked when set, applied after), converts messages and serves the ROS 2
-simulation_interfaces standard (rotrod_ros.simulation_control: play, pause, stop, step,
-reset, the tip's state; docs/simulation_control.md) and its older ~/reset and ~/pause.
-A command is queued with its arrival time and applied by the physics thread at the
-simulated instant it arrived; paused, at the next step.
+them (rotrod_ros.parameters); docs/nodes.md lists the same. It holds a world of rods
+(rotrod_core.live.world): one rod with today's names by default, ``rods:=N`` copies of
+its rod named rod0 ... (their interfaces under ``rodK/``), and rods spawned and deleted
+through the simulation standard (rotrod_ros.entities). Physics runs in a thread of its
+own at a fixed step, every rod in one batch, paced to the clock (real_time_factor;
+0 = as fast as possible), at SCHED_FIFO realtime_priority where permitted:
+rotrod_core's RealTimeLoop (rotrod_core/live/loop.py). This node declares parameters
+(checked when set, applied after; the rod's parameters describe the rods it starts
+with), converts messages (rotrod_ros.rod_io, per rod) and serves the ROS 2
+simulation_interfaces standard (rotrod_ros.simulation_control: play, pause, stop,
+step, reset, entity states; docs/simulation_control.md) and its older ~/reset and
+~/pause. A command is queued with its arrival time and applied by the physics thread
+at the simulated instant it arrived; paused, at the next step.
 """
 
 from __future__ import annotations
@@ -26,34 +30,26 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, String
 from std_srvs.srv import SetBool, Trigger
 
 import rotrod_core.live.scheduling as scheduling
-from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
-from rotrod_core.estimation.whirl import WhirlEstimator
 from rotrod_core.live.engine import EngineConfig, SimulationEngine
-from rotrod_core.live.loop import PENDING_COMMANDS, RealTimeLoop, Sample, Status
-from rotrod_core.live.publication import SAMPLE_TOPICS
-from rotrod_core.model.geometry import rod_centerline, sphere_radius
-from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
-from rotrod_core.model.scene import scene
-from rotrod_core.model.urdf import urdf_text
+from rotrod_core.live.loop import RealTimeLoop, Sample, Status
+from rotrod_core.live.world import World
+from rotrod_core.model.interface import WORLD_FRAME
 
 from . import (
+    entities,
     interfaces,
     messages,
     node_main,
     parameter_specs,
+    rod_io,
     simulation_control,
     trajectory_server,
 )
-from .interfaces import pub, srv, sub
-from .keep_all import KeepAllPublishing
+from .interfaces import pub, srv
 from .node_main import ConfigurationError
-from .observation import Observation
 from .parameters import ALL_SPECS, NodeSettings, ParameterValues
 
 NODE_NAME = 'rotrod_simulator'
@@ -64,20 +60,6 @@ STOP_GRACE = 2.0
 """Wall seconds a lossless simulator stopped while a subscriber holds a publication up
 goes on trying, so that its last sample is published on every topic (within the 5 s
 the stop waits for the physics thread)."""
-COMMAND_QOS_DEPTH = PENDING_COMMANDS
-"""Queue depth of cmd/omega and cmd/torque: a burst of setpoints (a sender catching up)
-must not be dropped, since the setpoint shaper numbers a stream's samples in order."""
-
-COMMAND_TOPICS = ('cmd/omega', 'cmd/torque', 'joint_command')
-"""The subscriptions that carry commands."""
-SAMPLE_QOS_DEPTH = 100
-"""Queue depth of the sample topics when paced: a reliable subscriber that falls behind
-(a busy machine's scheduler, a garbage collection) by up to 100 publications (1 s at
-100 Hz) still receives every one; a slower one loses the oldest."""
-
-LOSSLESS = 'when started as fast as possible (real_time_factor 0)'
-"""The sample topics' keep_all condition: then a reliable KEEP_ALL subscriber (e.g.
-rerun_logger) gets every publication, the physics waiting for it when it falls behind."""
 
 
 class StopReport(NamedTuple):
@@ -114,54 +96,38 @@ def stop_report(log: str) -> StopReport | None:
 
 
 INTERFACES = (
-    sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity); with '
-        'command_timeout > 0 s, when no command is accepted on the active input for '
-        'that long, w ramps to 0 at max_angular_acceleration', COMMAND_QOS_DEPTH),
-    sub('cmd/torque', Float64, 'hub torque, N m (drive torque: free rotation); with '
-        'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
-    sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
-        "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
-        '(drive torque), read by name; other joints ignored; each field must be empty or '
-        'have one entry per name (sensor_msgs/JointState), else the message is rejected '
-        'with a warning and changes nothing; the same shaping, limits and timeout as '
-        'cmd/omega and cmd/torque (docs/ros_integration.md)', COMMAND_QOS_DEPTH),
-    pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
-        "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
-        "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
-        '1/publish_rate of simulated time', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
-    pub('tip/deflection', messages.Vector3Stamped, "(u, v, 0) m in frame 'rotor' (rotating: "
-        'x radial, y tangential), plus Gaussian noise of deflection_noise m (a sensor)',
-        SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
-    pub('tip/position', messages.PointStamped, "the mass, m, in frame 'world' (inertial; "
-        'z = rod length)', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
-    pub('frequencies', DynamicFrequencies, 'f1 <= f2 Hz at the published w (omega, rad/s; '
-        'Eq. 28, or the eigen analysis), stamped as the sample', SAMPLE_QOS_DEPTH,
-        keep_all=LOSSLESS),
-    pub('frequencies/estimate', WhirlEstimate, 'f1 (forward whirl), f2 (backward) Hz, '
-        'their standard deviations, whether each is valid and why not, estimated from the '
-        'published (u, v) over the last estimate_window, every 1/estimate_rate; stamped at '
-        "the window's middle, which it describes", SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
-    pub('markers', messages.MarkerArray, "disk, rod, mass, trail (frame 'world'), at "
-        'marker_rate Hz of simulated time'),
+    *rod_io.INTERFACES,
     pub('/diagnostics', messages.DiagnosticArray, 'OK / WARN / ERROR with the reason and '
-        'key values'),
+        'key values, a status per rod'),
     pub('/clock', Clock, 'simulated time, when real_time_factor != 1 or start_paused; '
         'with each publication, also when stepped'),
-    pub('robot_description', String, 'the URDF of the rod (rotrod urdf) with its physical '
-        'parameters and the drive\'s limits in a <rotrod> element, from the parameters in '
-        'use: published at start and after every parameter change; what the other nodes '
-        'read the rod from', 1, transient_local=True),
-    *trajectory_server.INTERFACES,
     *simulation_control.INTERFACES,
+    *entities.INTERFACES,
     srv('~/reset', Trigger, 'back to the initial state, the simulated time going on; clears '
         'a halt (kept alias of ~/reset_simulation with SCOPE_STATE)'),
     srv('~/pause', SetBool, 'true: pause, false: resume (kept alias of '
         '~/set_simulation_state STATE_PAUSED / STATE_PLAYING)'),
 )
+"""The node's interfaces: every rod's (rod_io.INTERFACES, under the rod's prefix), then
+the world's."""
+ROD_INTERFACES = {i.name for i in rod_io.INTERFACES}
+
+
+def started_rods(count: int) -> list[tuple[str, str]]:
+    """(name, prefix) of the rods a simulator starts with: one as today, or rod0... ."""
+    if count == 1:
+        return [('', '')]
+    return [(f'rod{k}', f'rod{k}/') for k in range(count)]
 
 
 class SimulatorNode(Node):
-    """The simulator: parameters, topics, services; the physics is :attr:`loop`'s."""
+    """The simulator: a world of rods, its parameters, topics and services.
+
+    The physics is :attr:`loop`'s (a :class:`~rotrod_core.live.world.World` stepped as one
+    batch); each rod's ROS side is a :class:`~rotrod_ros.rod_io.RodIO` in :attr:`rods`.
+    """
+
+    stop_grace = STOP_GRACE
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
@@ -174,58 +140,88 @@ class SimulatorNode(Node):
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
         engine_config, settings = self._param_values.checked
-        self._observation = Observation(settings)
-        prefix = settings.frame_prefix
-        self._rotor_frame, self._world_frame = prefix + ROTOR_FRAME, prefix + WORLD_FRAME
-        self._marker_frames = messages.MarkerFrames(self._world_frame, MARKER_NAMESPACE)
-        self._messages = messages.SampleMessages(self._rotor_frame, self._world_frame)
         self._status_name = f'{self.get_fully_qualified_name()}: simulation'
+        self.world = World(engine_config.physics_rate)
+        self.rods: dict[str, rod_io.RodIO] = {}
+        """Each rod's ROS side, by its name in the world ('' for a single started rod)."""
+        self.started = [name for name, _ in started_rods(values['rods'])]
+        """The rods the parameters describe (the others were spawned)."""
+        self._goals: dict[int, trajectory_server.TrajectoryServer] = {}
+        self._clock_time: float | None = None
         self.loop = RealTimeLoop(
-            SimulationEngine(engine_config), settings, self._publish,
-            publish_status=self._publish_status,
-            snapshot=lambda: self._observation.estimator,
+            self.world, settings, self._publish, publish_status=self._publish_status,
+            snapshot=lambda: {name: io.observation.estimator
+                              for name, io in self.rods.items()},
             logger=self.get_logger(), running=self.context.ok,
             inputs={'omega': 'cmd/omega or joint_command',
                     'torque': 'cmd/torque or joint_command'},
             ready=self._subscribers_ready if settings.subscriber_wait()[0] else None,
-            on_trajectory=lambda outcome: self._trajectories.on_outcome(outcome))
-        self._trajectories: trajectory_server.TrajectoryServer = \
-            trajectory_server.TrajectoryServer(self, self.loop)
+            on_trajectory=self._on_trajectory)
         self._wait_deadline: float | None = None
-        submit = self.loop.submit
-        self._control = control = simulation_control.SimulationControl(
-            self, self.loop, self._reset, self._world_frame, self._take_pending_commands)
-        group = control.callback_group
-        control_callbacks = control.callbacks()
-        control_callbacks['~/simulate_steps']['callback_group'] = group
         # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
         self.lossless = settings.real_time_factor == 0
-        self._io = interfaces.create(self, INTERFACES, {
-            'cmd/omega': lambda msg: submit('omega', msg.data, 'cmd/omega'),
-            'cmd/torque': lambda msg: submit('torque', msg.data, 'cmd/torque'),
-            'joint_command': self._on_joint_command,
-            '~/reset': self._on_reset, '~/pause': self._on_pause, **control_callbacks,
-            **self._trajectories.callbacks()},
-            conditions={LOSSLESS} if self.lossless else (),
-            callback_groups={i.name: group for i in simulation_control.INTERFACES})
-        # paced, a held-up publication is dropped; as fast as possible, the physics waits
-        # (and on a stop, finishes publishing its sample: up to STOP_GRACE)
-        self._keep_all = KeepAllPublishing(self._io, self.get_logger(), self.context.ok,
-                                           lambda: self.loop.running, STOP_GRACE)
+        self._conditions = {rod_io.LOSSLESS} if self.lossless else set()
+        self._control = control = simulation_control.SimulationControl(
+            self, self.loop, self._reset, settings.frame_prefix + WORLD_FRAME,
+            self._take_pending_commands, remove_spawned=self._remove_spawned,
+            max_steps=lambda: self.settings.max_steps_per_request)
+        self.entities = entities.EntityServices(self)
+        group = control.callback_group
+        callbacks = {**control.callbacks(), **self.entities.callbacks()}
+        callbacks['~/simulate_steps']['callback_group'] = group
+        world_interfaces = [i for i in INTERFACES if i.name not in ROD_INTERFACES]
+        self._io = interfaces.create(self, world_interfaces, {
+            '~/reset': self._on_reset, '~/pause': self._on_pause, **callbacks},
+            callback_groups={i.name: group for i in world_interfaces if i.kind in ('srv',
+                                                                                   'action')})
+        for name, prefix in started_rods(values['rods']):
+            self.add_rod(name, prefix, engine_config, rod_io.ORIGIN)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self._description: str | None = None
-        self._publish_description()
 
     @property
     def engine(self) -> SimulationEngine:
-        """The simulation."""
+        """The simulation of a single rod (ValueError for a world of several)."""
         return self.loop.engine
 
     @property
     def settings(self) -> NodeSettings:
         """The node's current settings."""
         return self.loop.settings
+
+    # ----------------------------------------------------------------- rods
+    def add_rod(self, name: str, prefix: str, config: EngineConfig,
+                pose: rod_io.Pose) -> rod_io.RodIO:
+        """A rod joins the world (between steps): its engine and its ROS side."""
+        with self.loop.lock:
+            engine = SimulationEngine(config, world=self.world, name=name)
+            io = rod_io.RodIO(self, self.loop, engine, prefix, pose, self.settings,
+                              self._conditions, on_goal=self._goals.__setitem__)
+            self.rods[name] = io
+        io.publish_description(config, self.settings.disk_radius)
+        return io
+
+    def remove_rod(self, name: str) -> None:
+        """A rod leaves the world (between steps): its goals end, its interfaces go."""
+        with self.loop.lock:
+            io = self.rods.pop(name)
+            engine = self.world.remove(name)
+            engine._end_goals('INVALID_GOAL', 'the rod was deleted')
+            self.loop._report_outcomes_of(engine)
+        io.destroy()
+
+    def _remove_spawned(self) -> list[str]:
+        """Take every spawned rod out of the world (ResetSimulation's SCOPE_SPAWNED)."""
+        spawned = [name for name in self.rods if name not in self.started]
+        for name in spawned:
+            self.remove_rod(name)
+        return spawned
+
+    def _on_trajectory(self, outcome) -> None:
+        """A trajectory's outcome (the loop's thread): to its rod's server."""
+        server = self._goals.pop(outcome.token, None)
+        if server is not None:
+            server.on_outcome(outcome)
 
     # ----------------------------------------------------------------- parameters
     def _validate_parameters(self, params: list[Parameter]) -> SetParametersResult:
@@ -234,7 +230,10 @@ class SimulatorNode(Node):
             return SetParametersResult(successful=False, reason='the simulator is the clock '
                                        'source; use_sim_time must stay false')
         try:
-            self._param_values.check({p.name: p.value for p in params})
+            engine_config, _ = self._param_values.check({p.name: p.value for p in params})
+            for name in self.rods:
+                if name not in self.started:          # a spawned rod keeps its rod and limits
+                    self.entities.config_with(engine_config, name)
         except ValueError as exc:
             self.get_logger().warning(f'parameter change rejected: {exc}')
             return SetParametersResult(successful=False, reason=str(exc))
@@ -243,40 +242,39 @@ class SimulatorNode(Node):
     def _apply_parameters(self, params: list[Parameter]) -> None:
         """Post set: apply the values the on-set callback checked."""
         engine_config, settings = self._param_values.take({p.name: p.value for p in params})
+        configs = {name: (engine_config if name in self.started else
+                          self.entities.config_with(engine_config, name))
+                   for name in self.rods}
         with self.loop.lock:
             old = self.loop.settings
-            self.loop.reconfigure(engine_config, settings)
-            self._observation.reconfigure(old, settings)
+            if engine_config.physics_rate != self.world.physics_rate:
+                self.world.set_physics_rate(engine_config.physics_rate)
+            self.loop.reconfigure(configs, settings)
+            for io in self.rods.values():
+                io.observation.reconfigure(old, settings)
         changed = ', '.join(f'{p.name}={p.value!r}' for p in params)
         self.get_logger().info(f'parameters changed: {changed}')
-        self._publish_description()
+        for name, io in self.rods.items():
+            io.publish_description(configs[name], settings.disk_radius)
 
-    def description(self) -> str:
-        """The URDF of the rod in use, with its <rotrod> description."""
-        config = self.engine.config
-        return urdf_text(config.params, limits=config.drive_limits,
-                         disk_radius=self.settings.disk_radius)
-
-    def _publish_description(self) -> None:
-        """robot_description: the URDF of the parameters in use (if it changed)."""
-        text = self.description()
-        if text != self._description:
-            self._description = text
-            self._io['robot_description'].publish(String(data=text))
+    def description(self, rod: str = '') -> str | None:
+        """The URDF a rod last published (the first rod's by default)."""
+        return self.rods[rod].description
 
     def _waited_topics(self) -> list[str]:
-        return [t for t in SAMPLE_TOPICS
+        return [t for t in rod_io.SAMPLE_TOPICS
                 if t != 'frequencies/estimate' or self.settings.estimate_window]
 
     def _subscribers_ready(self) -> bool:
         """Whether simulated time may start (loop thread).
 
-        Yes once every sample topic has the subscriptions wanted
+        Yes once every started rod's sample topics have the subscriptions wanted
         (NodeSettings.subscriber_wait), or when the wait is over.
         """
         wanted, longest = self.settings.subscriber_wait()
         topics = self._waited_topics()
-        lacking = [t for t in topics if self._io[t].get_subscription_count() < wanted]
+        lacking = [io.prefix + t for io in list(self.rods.values()) for t in topics
+                   if io.io[t].get_subscription_count() < wanted]
         if not lacking:
             self.get_logger().info(f'starting: {wanted} subscription(s) on each of '
                                    f'{", ".join(topics)}')
@@ -294,30 +292,15 @@ class SimulatorNode(Node):
 
     # ----------------------------------------------------------------- commands
     def _take_pending_commands(self) -> int:
-        """Take what the command subscriptions hold now and queue it; how many.
+        """Take what the rods' command subscriptions hold now and queue it; how many.
 
         Called before a step request is queued (in the executor's thread, where the
         subscriptions' callbacks run too): a command that has reached the simulator
         before the request applies at its start even if the executor would have
-        taken the request first. Topic by topic, each in its order of arrival.
+        taken the request first. Rod by rod, topic by topic, each in its order of
+        arrival.
         """
-        taken = 0
-        for name in COMMAND_TOPICS:
-            subscription = self._io[name]
-            while (got := interfaces.take(subscription)) is not None:
-                subscription.callback(got[0])
-                taken += 1
-        return taken
-
-    def _on_joint_command(self, msg: JointState) -> None:
-        """joint_command: the hub's entry into the command queue, or a logged rejection."""
-        try:
-            kind, value = hub_command(msg.name, msg.position, msg.velocity, msg.effort,
-                                      self.loop.engine.config.drive)
-        except MalformedJointCommand as exc:
-            self.loop.reject('joint_command', str(exc))
-            return
-        self.loop.submit(kind, value, 'joint_command')
+        return sum(io.take_pending_commands() for io in list(self.rods.values()))
 
     # ----------------------------------------------------------------- services
     def _reset(self, state: bool, time: bool) -> tuple:
@@ -327,7 +310,8 @@ class SimulatorNode(Node):
         """
         with self.loop.lock:
             result = self.loop.reset(state=state, time=time)
-            self._observation.reset(self.settings, noise=state and time)
+            for io in self.rods.values():
+                io.observation.reset(self.settings, noise=state and time)
         return result
 
     def _on_reset(self, request: Trigger.Request,
@@ -363,48 +347,33 @@ class SimulatorNode(Node):
         """
         self.loop.stop()
         if self.lossless:
-            self._keep_all.flush(SAMPLE_TOPICS, FLUSH_TIMEOUT)
-        sent = self._keep_all
+            for io in self.rods.values():
+                io.flush(FLUSH_TIMEOUT)
+        held = sum(io.keep_all.held_up for io in self.rods.values())
+        dropped = sum(io.keep_all.dropped for io in self.rods.values())
         self.get_logger().info(stop_line(StopReport(
-            self.engine.time, self.loop.publications, sent.held_up, sent.dropped,
-            self.engine.late_setpoints)))
+            self.world.time, self.loop.publications, held, dropped,
+            self.loop.late_setpoints)))
 
     # ----------------------------------------------------------------- publishing
     def _publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,
-                 estimator: WhirlEstimator | None) -> None:
-        st, stamp, obs = s.state, messages.stamp(s.stamp), self._observation
-        wait = not settings.real_time_factor       # as fast as possible: lossless
-        send, m = self._keep_all.send, self._messages
-        u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
-        send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque), wait)
-        send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
-        send('tip/position', messages.set_position(m.position, stamp, s.position), wait)
-        send('frequencies', messages.set_frequencies(m.frequencies, stamp, float(st.omega),
-                                                     *s.frequencies), wait)
-        self._trajectories.feedback(stamp, s.tracking)
-        io = self._io
-        if settings.publishes_clock:
-            io['/clock'].publish(messages.clock(stamp))
-        if estimator is not None:
-            estimate = estimator.push(s.time, u, v)
-            if estimate is not None:       # stamped at its window's middle
-                middle = messages.stamp(s.stamp - (s.time - estimate.time))
-                send('frequencies/estimate',
-                     messages.set_whirl_estimate(m.estimate, middle, estimate), wait)
-        if s.markers:
-            theta = float(st.theta)
-            rod = rod_centerline(config.params, float(st.u), float(st.v), theta,
-                                 scale=settings.marker_deflection_scale).tolist()
-            io['markers'].publish(self._marker_frames.frame(stamp, scene(
-                disk_radius=settings.disk_radius, theta=theta, rod=rod,
-                rod_diameter=float(config.params.rod_diameter),
-                mass_radius=sphere_radius(float(config.params.mass)),
-                trail=obs.trail(rod[-1]))))
+                 estimators: dict) -> None:
+        """A rod's sample (the physics thread); /clock once per instant."""
+        if settings.publishes_clock and s.time != self._clock_time:
+            self._clock_time = s.time
+            self._io['/clock'].publish(messages.clock(messages.stamp(s.stamp)))
+        io = self.rods.get(s.rod)
+        if io is not None:                    # not deleted since the sample was taken
+            io.publish(s, settings, config, estimators.get(s.rod))
 
-    def _publish_status(self, status: Status) -> None:
-        self._io['/diagnostics'].publish(messages.diagnostics(
-            messages.stamp(status.stamp), self._status_name, self.get_fully_qualified_name(),
-            status.level, status.message, status.values))
+    def _publish_status(self, statuses: list[Status]) -> None:
+        if not statuses:
+            return
+        fqn = self.get_fully_qualified_name()
+        self._io['/diagnostics'].publish(messages.diagnostics_array(
+            messages.stamp(statuses[0].stamp),
+            [(self._status_name if not st.rod else f'{fqn}: {st.rod}', fqn, st.level,
+              st.message, st.values) for st in statuses]))
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -418,7 +387,8 @@ def _started(node: SimulatorNode) -> None:
     priority = node.settings.realtime_priority
     # said before the loop thread starts, so a user (or a test) reads what the node will
     # wait for before the loop's own "starting: ..." line
-    s, c = node.settings, node.engine.config
+    s = node.settings
+    c = next(iter(node.world)).config
     wanted, longest = s.subscriber_wait()
     if wanted:
         node.get_logger().info(
@@ -427,8 +397,10 @@ def _started(node: SimulatorNode) -> None:
             f'(wait_for_subscribers {s.wait_for_subscribers}'
             + (f': as fast as possible, for at most {longest:g} s)'
                if math.isfinite(longest) else ')'))
+    names = ', '.join(node.world.engines)
+    rods = '' if len(node.world) == 1 else f'{len(node.world)} rods ({names}), '
     node.get_logger().info(
-        f'ready: drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
+        f'ready: {rods}drive={c.drive}, coupling={c.coupling}, physics {c.physics_rate:g} Hz, '
         f'publish {s.publish_rate:g} Hz, real_time_factor {s.real_time_factor:g}'
         + (', paused at simulated time 0 (start_paused): step or play through '
            '~/step_simulation, ~/simulate_steps or ~/set_simulation_state'

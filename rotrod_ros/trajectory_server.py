@@ -76,6 +76,8 @@ INTERFACES = (
 )
 
 Result = FollowJointTrajectory.Result
+_TOKENS = itertools.count(1)
+"""The goals' tokens: unique in the process (a world's rods share its loop)."""
 CODES = {name: getattr(Result, name) for name in (
     'SUCCESSFUL', 'INVALID_GOAL', 'INVALID_JOINTS', 'OLD_HEADER_TIMESTAMP',
     'PATH_TOLERANCE_VIOLATED', 'GOAL_TOLERANCE_VIOLATED')}
@@ -138,27 +140,41 @@ class TrajectoryServer:
     Args:
         node: the simulator node (a guard condition of its own wakes the executor when
             the physics thread has an outcome).
-        loop: the simulator's RealTimeLoop, whose ``on_trajectory`` must be
-            :meth:`on_outcome`.
+        loop: the simulator's RealTimeLoop, whose ``on_trajectory`` must reach
+            :meth:`on_outcome` for this server's goals.
+        rod: the rod's name in the loop's world ('': its only rod).
+        action_name: the action's name (the rod's prefix + ACTION_NAME).
+        on_goal: called with each goal's token and this server before the goal goes
+            to the loop (the host routes its outcome back here).
     """
 
-    def __init__(self, node, loop: RealTimeLoop) -> None:
+    def __init__(self, node, loop: RealTimeLoop, *, rod: str = '',
+                 action_name: str = ACTION_NAME, on_goal=None) -> None:
         self.loop = loop
+        self.rod, self.action_name = rod, action_name
+        self._on_goal = on_goal or (lambda token, server: None)
+        self._node = node
         self._logger = node.get_logger()
         self._wake = node.create_guard_condition(lambda: None)
-        self._ids = itertools.count(1)
         self._running: dict[int, tuple[Any, Future]] = {}
         self._tokens: dict[bytes, int] = {}       # goal id -> token, while running
         self._feedback = FollowJointTrajectory.Feedback(joint_names=[HUB_JOINT])
+
+    def destroy(self) -> None:
+        """Release the guard condition (the rod left the world)."""
+        self._node.destroy_guard_condition(self._wake)
 
     def callbacks(self) -> dict[str, Any]:
         """The action's ActionServer arguments, for :func:`rotrod_ros.interfaces.create`."""
         return {ACTION_NAME: {'execute_callback': self.execute,
                               'cancel_callback': self.cancel}}
 
+    def _submit(self, kind: str, value) -> None:
+        self.loop.submit(kind, value, self.action_name, self.rod)
+
     async def execute(self, goal_handle):
         """Execute callback: refuse with the code and reason, or run to the outcome."""
-        token = next(self._ids)
+        token = next(_TOKENS)
         try:
             goal = trajectory_goal(goal_handle.request, self.loop.simulated_time, token)
         except TrajectoryRejected as exc:
@@ -168,11 +184,12 @@ class TrajectoryServer:
         key = bytes(goal_handle.goal_id.uuid)
         self._tokens[key] = token
         last = goal.points[-1]
-        self._logger.info(f'trajectory goal {token}: {len(goal.points)} point(s) to '
-                          f'{last.time:g} s')
-        self.loop.submit('trajectory', goal, ACTION_NAME)
+        self._logger.info(f'{self.action_name} goal {token}: {len(goal.points)} point(s) '
+                          f'to {last.time:g} s')
+        self._on_goal(token, self)
+        self._submit('trajectory', goal)
         if goal_handle.is_cancel_requested:         # cancelled before it was known here
-            self.loop.submit('cancel_trajectory', token, ACTION_NAME)
+            self._submit('cancel_trajectory', token)
         outcome = await future
         self._tokens.pop(key, None)
         return self._end(goal_handle, outcome)
@@ -181,7 +198,7 @@ class TrajectoryServer:
         """Cancel callback: the physics holds w from the cancel's arrival; always accepted."""
         token = self._tokens.get(bytes(goal_handle.goal_id.uuid))
         if token is not None:
-            self.loop.submit('cancel_trajectory', token, ACTION_NAME)
+            self._submit('cancel_trajectory', token)
         return CancelResponse.ACCEPT
 
     def on_outcome(self, outcome: TrajectoryOutcome) -> None:
@@ -201,7 +218,7 @@ class TrajectoryServer:
             goal_handle.succeed()
         else:
             goal_handle.abort()
-        line = f'trajectory goal {outcome.token}: {outcome.code}: {outcome.message}'
+        line = f'{self.action_name} goal {outcome.token}: {outcome.code}: {outcome.message}'
         # one call site per severity: rclpy's logger binds a call site to one
         if outcome.code in (SUCCESSFUL, CANCELED):
             self._logger.info(line)

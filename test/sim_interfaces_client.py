@@ -70,6 +70,12 @@ class Client:
         n.create_subscription(Clock, '/clock', lambda m: self.clock.append(
             m.clock.sec * 10**9 + m.clock.nanosec), 100)
 
+    def close(self) -> None:
+        """Destroy the action client, then the node (rclpy's destroy_node leaves action
+        clients alive, and with them the DDS participant past the process's exit)."""
+        self.action.destroy()
+        self.node.destroy_node()
+
     def wait_for(self, done, what: str):
         deadline = time.monotonic() + TIMEOUT
         while not done():
@@ -162,8 +168,8 @@ def bad_requests(client: Client) -> dict:
         'step_0': client.call('step', StepSimulation.Request(steps=0)).result.result,
         'unknown_entity': client.call('entity', GetEntityState.Request(
             entity='no_such_thing')).result.result,
-        'scope_spawned': client.call('reset', ResetSimulation.Request(
-            scope=ResetSimulation.Request.SCOPE_SPAWNED)).result.result,
+        'steps_past_bound': client.call('step', StepSimulation.Request(
+            steps=2**63 - 1)).result.result,
         'pause_again': set_state(client, SimulationState.STATE_PAUSED),
         'no_world': set_state(client, SimulationState.STATE_NO_WORLD),
         'unknown_state': set_state(client, 17),
@@ -204,7 +210,7 @@ def main() -> int:
         report['ok'] = Result.RESULT_OK
     finally:
         print('@@REPORT@@' + json.dumps(report), flush=True)
-        client.node.destroy_node()
+        client.close()
         rclpy.try_shutdown()
     return 0
 

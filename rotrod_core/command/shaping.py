@@ -120,6 +120,27 @@ class Ramp:
         t0, t1, w0, w1 = self.times[i], self.times[i + 1], self.omegas[i], self.omegas[i + 1]
         return w0 + (w1 - w0) * ((t - t0) / (t1 - t0))
 
+    def omega_array(self, t: np.ndarray) -> np.ndarray:
+        """:meth:`omega` at each of the times ``t`` (>= start), rad/s: the same arithmetic."""
+        first, last = self._segment(float(t[0])), self._segment(float(t[-1]))
+        if first == last:                       # the usual case: one segment
+            if first == len(self.times) - 1:
+                return np.full(t.shape, float(self.omegas[-1]))
+            t0, t1 = self.times[first], self.times[first + 1]
+            w0, w1 = self.omegas[first], self.omegas[first + 1]
+            return w0 + (w1 - w0) * ((t - t0) / (t1 - t0))
+        knots = np.asarray(self.times, dtype=float)
+        values = np.asarray(self.omegas, dtype=float)
+        i = np.maximum(np.searchsorted(knots, t, side='right') - 1, 0)
+        last = i == len(knots) - 1
+        j = np.minimum(i, len(knots) - 2) if len(knots) > 1 else i
+        t0, w0 = knots[j], values[j]
+        t1, w1 = knots[np.minimum(j + 1, len(knots) - 1)], values[np.minimum(j + 1,
+                                                                          len(knots) - 1)]
+        with np.errstate(all='ignore'):      # the segments not selected may divide by 0
+            inside = w0 + (w1 - w0) * ((t - t0) / (t1 - t0))
+        return np.where(last, values[-1], inside)
+
     def omega_dot(self, t: float) -> float:
         """Angular acceleration just after time ``t`` >= start, rad/s^2."""
         i = self._segment(t)
@@ -290,6 +311,40 @@ class OmegaSetpointShaper:
         """Shaped angular velocity at time ``t`` (s), rad/s."""
         t = finite_number('time', t)
         return self._ramp_at(t).omega(t)
+
+    def segment(self, t_first: float, t_last: float) -> tuple | None:
+        """The one linear piece of w(t) over [t_first, t_last] (s), if one covers it.
+
+        (w0, w1, t0, t1): w(t) = w0 + (w1 - w0) ((t - t0) / (t1 - t0)), the arithmetic of
+        :meth:`omega` (a constant w0 has w1 = w0). None when w bends in between.
+        """
+        ramp = self._ramp_at(t_first)
+        if ramp is not self._ramp_at(t_last):
+            return None
+        i = ramp._segment(t_first)
+        if i != ramp._segment(t_last):
+            return None
+        if i == len(ramp.times) - 1:
+            w = ramp.omegas[-1]
+            return (w, w, t_first, t_first + 1.0)
+        return (ramp.omegas[i], ramp.omegas[i + 1], ramp.times[i], ramp.times[i + 1])
+
+    def omegas(self, times: np.ndarray) -> np.ndarray:
+        """:meth:`omega` at each of the increasing, finite ``times`` (s), rad/s.
+
+        The same arithmetic as :meth:`omega`, vectorised (a block of simulation steps).
+        """
+        times = np.asarray(times, dtype=float)
+        first = self._ramp_at(float(times[0]))
+        if first is self._ramp_at(float(times[-1])):      # the usual case: one ramp
+            return first.omega_array(times)
+        starts = [r.start for r in self._ramps]
+        which = np.maximum(np.searchsorted(starts, times, side='right') - 1, 0)
+        out = np.empty(times.shape)
+        for i in np.unique(which):
+            chosen = which == i
+            out[chosen] = self._ramps[int(i)].omega_array(times[chosen])
+        return out
 
     def omega_dot(self, t: float) -> float:
         """Shaped angular acceleration just after time ``t`` (s), rad/s^2."""

@@ -1,14 +1,16 @@
 """A live simulation session: one rod, its drive, command shaping, limits and health.
 
 :class:`SimulationEngine` is what a real-time front end (the ROS simulator node)
-drives: it owns a :class:`~rotrod_core.live.stepper.RealTimeStepper`, takes timestamped
-commands (angular-velocity setpoints or hub torques), advances in whole fixed steps
-on its own simulated clock and reports its health. The paper's critical deflection
-(``deflection_limit``, 3 mm) is a criterion it reports (health ERROR while the tip is
-beyond it), not a wall: the simulation goes on. It halts, keeping the last good state,
-only where the model stops meaning anything: a non-finite state, a deflection beyond
-the small-deflection bound ``max_deflection_ratio`` x rod length, or |w| beyond the
-``max_omega`` the integration step was sized for.
+drives: one rod of a :class:`~rotrod_core.live.world.World` (a world of its own unless
+given one), which steps it with the world's other rods as one batch. It takes
+timestamped commands (angular-velocity setpoints, hub torques, trajectories), advances
+in whole fixed steps on the world's simulated clock and reports its health. The
+paper's critical deflection (``deflection_limit``, 3 mm) is a criterion it reports
+(health ERROR while the tip is beyond it), not a wall: the simulation goes on. It
+halts, keeping the last good state, only where the model stops meaning anything: a
+non-finite state, a deflection beyond the small-deflection bound
+``max_deflection_ratio`` x rod length, or |w| beyond the ``max_omega`` the integration
+step was sized for.
 :class:`EngineConfig` holds everything that can be configured, validated as a whole
 so that a combination that makes no physical sense is refused with a reason.
 """
@@ -19,6 +21,7 @@ import dataclasses
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -48,10 +51,11 @@ from rotrod_core.live.execution import (
     TrajectoryGoal,
     TrajectoryOutcome,
 )
-from rotrod_core.live.stepper import RealTimeStepper
+from rotrod_core.live.world import NON_FINITE, TOO_FAR, BlockRecord, World
 from rotrod_core.model.description import DEFAULT_LIMITS, DriveLimits
 from rotrod_core.model.equations import (
     STATE_FIELDS,
+    Coefficients,
     State,
     check_coupling,
     check_rotary_inertia,
@@ -294,21 +298,35 @@ class Health:
     values: tuple = ()
 
 
-class SimulationEngine:
-    """One rod simulated in fixed steps on its own clock, driven by timestamped commands.
+class _Deflections(NamedTuple):
+    """Deflections of a block (what :meth:`SimulationEngine._watch_block` reads)."""
 
-    The simulated clock :attr:`time` (s) starts at 0 and only moves forward, but for
-    :meth:`reset_time` (:meth:`reset` returns the state, not the clock, to the start).
-    Commands may carry a time ``at`` (s, not before :attr:`time`): they take effect
-    then, so a front end that advances in batches of steps still applies each command
-    at the instant it arrived.
+    r: np.ndarray
+    r_max: float
+
+
+class SimulationEngine:
+    """One rod simulated in fixed steps on its world's clock, driven by timestamped commands.
+
+    The simulated clock :attr:`time` (s, the world's) starts at 0 and only moves
+    forward, but for :meth:`reset_time` (:meth:`reset` returns the state, not the
+    clock, to the start). Commands may carry a time ``at`` (s, not before :attr:`time`):
+    they take effect then, so a front end that advances in batches of steps still
+    applies each command at the instant it arrived.
+
+    Args:
+        config: the rod, its drive and limits.
+        world: the world it joins as ``name`` (default: a world of its own, which
+            :meth:`step` and :meth:`advance` step).
     """
 
-    def __init__(self, config: EngineConfig | None = None):
+    def __init__(self, config: EngineConfig | None = None, *, world: World | None = None,
+                 name: str = 'rod'):
         self.config = config if config is not None else EngineConfig()
-        self._origin = 0.0
-        self._steps = 0
-        self._stepper = self._make_stepper(self.config, self.config.initial_state)
+        self.world = World(self.config.physics_rate) if world is None else world
+        self.name = name
+        self._coefficients = Coefficients.from_params(self.config.params)
+        self._state = self.config.initial_state
         self.halted: str | None = None
         self._reset_watch()
         self.rejected_commands = 0
@@ -327,14 +345,9 @@ class SimulationEngine:
         """How trajectory goals ended, oldest first, for the host to take."""
         self._reset_commands()
         self._cache_limits()
+        self.world.add(name, self)
 
     # ----------------------------------------------------------------- construction
-    @staticmethod
-    def _make_stepper(config: EngineConfig, state: State) -> RealTimeStepper:
-        stepper = RealTimeStepper(config.params, config.dt, config.coupling)
-        stepper.set_state(**state._asdict())
-        return stepper
-
     def _reset_watch(self) -> None:
         """Forget crossings of the critical deflection and the peak (start and reset)."""
         self.peak_deflection = self.deflection
@@ -356,9 +369,8 @@ class SimulationEngine:
                                            omega=float(self.state.omega), time=self.time)
         self._torque_schedule: deque = deque()
         self.torque_command = 0.0
-        st = self._stepper
-        self._torque = (0.0 if cfg.drive == 'torque' else
-                        float(model.hub_torque(st.coefficients, st.state, 0.0, st.coupling)))
+        self._torque = (0.0 if cfg.drive == 'torque' else float(model.hub_torque(
+            self._coefficients, self._state, 0.0, cfg.coupling)))
         self._omega_dot = 0.0
         self._restart_timer()
 
@@ -383,8 +395,8 @@ class SimulationEngine:
     # ----------------------------------------------------------------- state
     @property
     def time(self) -> float:
-        """Simulated time, s."""
-        return self._origin + self._steps * self.config.dt
+        """Simulated time, s (the world's)."""
+        return self.world.time
 
     @property
     def dt(self) -> float:
@@ -394,7 +406,7 @@ class SimulationEngine:
     @property
     def state(self) -> State:
         """Current state (u, v, du, dv, theta, omega), SI units."""
-        return self._stepper.state
+        return self._state
 
     @property
     def torque(self) -> float:
@@ -426,9 +438,45 @@ class SimulationEngine:
         s = self.state
         return math.hypot(s.u, s.v)
 
+    def set_state(self, **values) -> State:
+        """Set some of the state by name (the others kept): a rod moved by hand.
+
+        Validated like an initial state (finite; within the validity bound and
+        ``max_omega``: ValueError). The commands start afresh from the new motion
+        (velocity drive holds the new w; a trajectory ends), the deflection watch
+        judges the new deflection.
+        """
+        state = make_state({**self._state._asdict(), **values}, scalar=True)
+        cfg = self.config
+        r = math.hypot(state.u, state.v)
+        if r > cfg.max_deflection:
+            raise ValueError(f'deflection {r:g} m is beyond the model\'s validity bound '
+                             f'{cfg.max_deflection:g} m')
+        omega = float(state.omega)
+        if abs(omega) > cfg.max_omega:
+            raise ValueError(f'|omega| {abs(omega):g} rad/s exceeds max_omega '
+                             f'{cfg.max_omega:g} rad/s')
+        self._state = state
+        self._end_goals(INVALID_GOAL, 'the state was set')
+        self._reset_commands()
+        self._watch_deflection(r)
+        return state
+
+    def _finite(self, what: str, *values) -> None:
+        if not all(math.isfinite(x) for x in values):
+            raise NonFiniteStateError(f'the {what} of the state {tuple(self._state)} '
+                                      f'overflows: {values}')
+
     def inertial_position(self) -> tuple:
-        """Position (x, y, z) of the mass in the inertial frame, m (z = rod length)."""
-        x, y = self._stepper.inertial_position()
+        """Position (x, y, z) of the mass in the inertial frame, m (z = rod length).
+
+        A quantity of the (always finite) state that overflows raises
+        :class:`NonFiniteStateError`, as do :meth:`energy` and :meth:`angular_momentum`.
+        """
+        s = self._state
+        x, y = (float(c) for c in model.inertial_position(self._coefficients, s.u, s.v,
+                                                           s.theta))
+        self._finite('inertial position', x, y)
         return x, y, float(self.config.params.rod_length)
 
     def tip_motion(self) -> TipMotion:
@@ -436,16 +484,20 @@ class SimulationEngine:
 
         w' is the hub's over the last step (:attr:`omega_dot`).
         """
-        return tip_motion(self._stepper.coefficients, self.state, self._omega_dot,
+        return tip_motion(self._coefficients, self.state, self._omega_dot,
                           float(self.config.params.rod_length))
 
     def energy(self) -> float:
         """Total mechanical energy, J."""
-        return self._stepper.energy()
+        e = float(model.energy(self._coefficients, self._state))
+        self._finite('energy', e)
+        return e
 
     def angular_momentum(self) -> float:
         """Angular momentum about the axis, kg m^2/s."""
-        return self._stepper.angular_momentum()
+        L = float(model.angular_momentum(self._coefficients, self._state))
+        self._finite('angular momentum', L)
+        return L
 
     def frequencies(self) -> tuple:
         """Dynamic frequencies (f1, f2) in Hz at the current w (Eq. 28 or eigen analysis)."""
@@ -640,109 +692,181 @@ class SimulationEngine:
         self.timed_out_at = None
         self.accepted_commands += 1
 
-    def _check_timeout(self, t0: float, dt: float) -> None:
-        """Start a timeout event if the command timeout runs out in the step from ``t0``.
+    def _timeout_step(self, t0: float, steps: int) -> int | None:
+        """Start a timeout event if the command timeout runs out within the block.
 
-        Velocity drive: w ramps to 0 at the acceleration limit from the instant the
-        timeout runs out (through the setpoint shaper, so w is continuous and |w'|
-        bounded). Torque drive: the torque is 0 from this step on (commands apply at
-        step instants too).
+        The block is ``steps`` steps from ``t0`` (s). Velocity drive: w ramps to 0 at the
+        acceleration limit from the instant the timeout runs out (through the setpoint
+        shaper, so w is continuous and |w'| bounded). Torque drive: the torque is 0 from
+        the step in which it runs out (commands apply at step instants too); returns
+        that step's index in the block (None: no timeout in it).
         """
         timeout = self.config.command_timeout
         if (not timeout or self.timed_out_at is not None or self.execution is not None
                 or self._pending_goal is not None):
-            return
+            return None
+        dt = self.config.dt
         deadline = self._last_command + timeout
         if self.config.drive == 'velocity':
-            if deadline > t0 + dt:
-                return
+            if deadline > t0 + steps * dt:
+                return None
             self.timed_out_at = max(deadline, t0)
             self._shaper.ramp_to(0.0, self.timed_out_at)
-        else:
-            if deadline > t0 + 0.5 * dt:
-                return
-            self.timed_out_at = t0
-            self.torque_command = 0.0
+            self.timeouts += 1
+            return None
+        k = max(0, math.ceil((deadline - t0) / dt - 0.5))
+        if k >= steps:
+            return None
+        self.timed_out_at = t0 + k * dt
+        self.torque_command = 0.0
         self.timeouts += 1
+        return k
 
     # ----------------------------------------------------------------- stepping
-    def step(self) -> bool:
-        """Advance one step; False (and no change) if halted or the step was refused."""
-        if self.halted:
-            return False
-        stepper, cfg, dt = self._stepper, self.config, self.config.dt
-        before = stepper.state
-        t0 = self.time
-        self._check_timeout(t0, dt)
+    # The world steps its rods together, in blocks (rotrod_core/live/world.py): each
+    # rod says how far it can plan (_block_limit) and what drives it over the block
+    # (_block_inputs), and takes the states the world computed (_block_done).
+
+    def _block_limit(self, t0: float, steps: int) -> int:
+        """How many of ``steps`` steps from ``t0`` (s) can be planned now (>= 1).
+
+        A trajectory that starts or ends within them ends the block at that step (the
+        start needs the hub's state then; the end changes what drives it), and one whose
+        path is checked goes a step at a time.
+        """
+        dt = self.config.dt
+        goal = self._pending_goal
+        if goal is not None and goal.start_time is not None:
+            k = math.ceil((goal.start_time - t0) / dt - 0.5)
+            if k > 0:
+                return min(steps, k)
+        ex = self.execution
+        if ex is not None:
+            if ex.checks_path or t0 >= ex.end - 1e-9 * dt:
+                return 1
+            return max(1, min(steps, math.ceil((ex.end - t0) / dt - 1e-9)))
+        return steps
+
+    def _block_inputs(self, t0: float, steps: int):
+        """What drives the hub over the block of ``steps`` steps from ``t0`` (s).
+
+        Velocity drive: the target w (rad/s) at the end of each step (its trajectory's,
+        or the shaped setpoints'); torque drive: the hub torque (N m) over each step.
+        As an array of ``steps`` values, or compactly (what most blocks are): a float,
+        the same value for every step, or a tuple (w0, w1, t0, t1), the linear piece
+        w0 + (w1 - w0) ((t - t0) / (t1 - t0)) at each step's end t.
+        """
         if self._pending_goal is not None:
             self._start_goal_if_due(t0)
-        ex = self.execution
-        try:
-            if cfg.drive == 'velocity':
-                target = ex.omega(t0 + dt) if ex is not None else self._shaper.omega(t0 + dt)
-                omega_dot = (target - float(before.omega)) / dt
-                state = stepper.step_velocity(omega_dot)
-            else:
-                while self._torque_schedule and self._torque_schedule[0][0] <= t0 + 0.5 * dt:
-                    self.torque_command = self._torque_schedule.popleft()[1]
-                state = stepper.step_torque(self.torque_command)
-        except NonFiniteStateError:
-            self.halted = f'non-finite state at t = {t0 + dt:.6f} s'
-            self._end_goals(PATH_TOLERANCE_VIOLATED, f'the simulation halted: {self.halted}')
-            return False
-        r = math.hypot(state.u, state.v)
-        problem = None
-        if r > cfg.max_deflection:
-            problem = (f'deflection {r * 1e3:.4g} mm beyond the model\'s validity bound '
-                       f'{cfg.max_deflection * 1e3:.4g} mm (max_deflection_ratio '
-                       f'{cfg.max_deflection_ratio:g} x rod length; small-deflection model) '
-                       f'at t = {t0 + dt:.4f} s')
-        elif abs(float(state.omega)) > cfg.max_omega:
-            problem = (f'|omega| {abs(state.omega):.4g} rad/s beyond max_omega '
-                       f'{cfg.max_omega:.4g} rad/s at t = {t0 + dt:.4f} s')
-        if problem:
-            stepper.set_state(**before._asdict())
-            self.halted = problem + '; halted at the last good state'
-            self._end_goals(PATH_TOLERANCE_VIOLATED, f'the simulation halted: {self.halted}')
-            return False
-        self._steps += 1
-        self._watch_deflection(r)
-        self._torque = stepper.torque
-        self._omega_dot = stepper.omega_dot
-        if ex is not None:
+        dt = self.config.dt
+        torque = self.torque_command                     # torque drive, before a timeout
+        timeout = self._timeout_step(t0, steps)
+        if self.config.drive == 'velocity':
+            ex = self.execution
+            if ex is not None:
+                times = t0 + dt * np.arange(1, steps + 1)
+                return np.asarray(ex.trajectory.omega(times - ex.start), dtype=float)
+            piece = self._shaper.segment(t0 + dt, t0 + steps * dt)
+            if piece is not None:
+                return piece
+            return self._shaper.omegas(t0 + dt * np.arange(1, steps + 1))
+        schedule = self._torque_schedule
+        if not schedule and timeout is None:
+            return torque
+        torques = np.full(steps, torque)
+        while schedule and schedule[0][0] <= t0 + (steps - 0.5) * dt:
+            t, q = schedule.popleft()
+            torques[max(0, math.ceil((t - t0) / dt - 0.5)):] = q
+            self.torque_command = q
+        if timeout is not None:
+            torques[timeout:] = 0.0
+            self.torque_command = 0.0
+        return torques
+
+    def _block_done(self, t0: float, record: BlockRecord) -> None:
+        """Take the states of the block from ``t0`` (s) the world computed."""
+        n = record.taken
+        if n:
+            last = record.last
+            self._state = State(*last[:6])
+            self._omega_dot, self._torque = last[6], last[7]
+            self._watch_block(record, t0)
+        if record.rejected is not None:
+            self._halt(t0 + (n + 1) * self.config.dt, *record.rejected)
+            return
+        if self.execution is not None and n:
             self._track(self._omega_dot)
-        if self._steps % 32 == 0:     # a 10 kHz stream leaves a ramp per setpoint
-            self._shaper.forget_before(self.time)
-        return True
+        self._shaper.forget_before(self.time)    # a 10 kHz stream leaves a ramp per setpoint
+
+    def _halt(self, t: float, reason: int, refused: tuple, drive_value: float) -> None:
+        """Halt at the last good state: the step ending at ``t`` (s) was refused."""
+        cfg = self.config
+        if reason == NON_FINITE:
+            self.halted = f'non-finite state at t = {t:.6f} s'
+        else:
+            u, v, omega = refused[0], refused[1], refused[5]
+            if reason == TOO_FAR:
+                problem = (f'deflection {math.hypot(u, v) * 1e3:.4g} mm beyond the model\'s '
+                           f'validity bound {cfg.max_deflection * 1e3:.4g} mm '
+                           f'(max_deflection_ratio {cfg.max_deflection_ratio:g} x rod '
+                           f'length; small-deflection model) at t = {t:.4f} s')
+            else:
+                problem = (f'|omega| {abs(omega):.4g} rad/s beyond max_omega '
+                           f'{cfg.max_omega:.4g} rad/s at t = {t:.4f} s')
+            self.halted = problem + '; halted at the last good state'
+        self._end_goals(PATH_TOLERANCE_VIOLATED, f'the simulation halted: {self.halted}')
+        self.world.changed()
+
+    def _watch_block(self, record, t0: float) -> None:
+        """:meth:`_watch_deflection` over a block's steps from ``t0`` (s).
+
+        ``record``: its ``r`` (the deflection at each step, m) and ``r_max``.
+        """
+        dt, r_max = self.config.dt, record.r_max
+        if r_max > self.peak_deflection:
+            i = int(np.argmax(record.r))
+            self.peak_deflection, self.peak_deflection_at = r_max, t0 + (i + 1) * dt
+        if r_max <= self.config.deflection_limit:
+            self.beyond_limit_since = None
+            return
+        r = record.r
+        above = r > self.config.deflection_limit
+        times = t0 + dt * np.arange(1, len(r) + 1)
+        before = np.concatenate(([self.beyond_limit_since is not None], above[:-1]))
+        starts = np.flatnonzero(above & ~before)
+        if len(starts):
+            self.limit_crossings += len(starts)
+            if self.first_crossed_at is None:
+                self.first_crossed_at = float(times[starts[0]])
+        if not above[-1]:
+            self.beyond_limit_since = None
+        elif len(starts):
+            self.beyond_limit_since = float(times[starts[-1]])
 
     def _watch_deflection(self, r: float) -> None:
         """Follow the critical-deflection criterion: crossings, and the peak so far."""
-        if r > self.peak_deflection:
-            self.peak_deflection, self.peak_deflection_at = r, self.time
-        if r > self.config.deflection_limit:
-            if self.beyond_limit_since is None:
-                self.beyond_limit_since = self.time
-                self.limit_crossings += 1
-                if self.first_crossed_at is None:
-                    self.first_crossed_at = self.time
-        else:
-            self.beyond_limit_since = None
+        self._watch_block(_Deflections(np.array([r]), r), self.time - self.config.dt)
+
+    def _own_world(self) -> World:
+        if len(self.world) != 1:
+            raise RuntimeError(f'{self.name} is one of {len(self.world)} rods of a world: '
+                               'step the world')
+        return self.world
+
+    def step(self) -> bool:
+        """Advance one step; False (and no change) if halted or the step was refused.
+
+        For a rod in a world of its own (else :meth:`World.advance`).
+        """
+        return self._own_world().advance(1) == 1
 
     def advance(self, steps: int) -> int:
         """Take up to ``steps`` steps (fewer if halted); return how many were taken."""
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)):
-            raise ValueError(f'steps must be a whole number, got {steps!r}')
-        done = 0
-        while done < steps and self.step():
-            done += 1
-        return done
+        return self._own_world().advance(steps)
 
     def steps_until(self, t: float) -> int:
         """Number of whole steps from :attr:`time` to reach time ``t`` (s), >= 0."""
-        n = (finite_number('t', t) - self.time) / self.config.dt + 1e-9
-        if not math.isfinite(n):
-            raise ValueError(f't = {t!r} s is too many steps of {self.config.dt:g} s away')
-        return max(0, math.floor(n))
+        return self.world.steps_until(t)
 
     def advance_to(self, t: float) -> int:
         """Take the whole steps that do not pass time ``t`` (s); return how many."""
@@ -751,22 +875,28 @@ class SimulationEngine:
     # ----------------------------------------------------------------- control
     def reset(self) -> None:
         """Back to the configured initial state (clock keeps running); clears a halt."""
-        self._stepper.set_state(**self.config.initial_state._asdict())
+        self._state = self.config.initial_state
         self.halted = None
         self._end_goals(INVALID_GOAL, 'the simulation was reset')
         self._reset_commands()
         self._reset_watch()
+        self.world.changed()
 
     def reset_time(self) -> None:
         """Simulated time back to 0, keeping the state; commands start afresh.
+
+        The world's clock (every rod's): see :meth:`_time_reset` for what a rod does.
+        """
+        self.world.reset_time()
+
+    def _time_reset(self) -> None:
+        """The world's time went back to 0: commands start afresh.
 
         The setpoint shaper and the torque schedule hold times: they restart from the
         current motion (velocity drive holds the current w, torque drive has zero
         torque), as after :meth:`reset`; the command timeout and the deflection watch
         count from 0. With :meth:`reset` too, the session is as at its start.
         """
-        self._origin, self._steps = 0.0, 0
-        self._stepper.time = 0.0
         self._end_goals(INVALID_GOAL, 'the simulated time was reset')
         self._reset_commands()
         self._reset_watch()
@@ -780,16 +910,17 @@ class SimulationEngine:
         restarts the command timeout and ends a timeout event in course (velocity
         drive then holds the w reached; torque drive keeps zero torque). A new
         ``deflection_limit`` judges the current deflection against it at once; a
-        validity bound below the current deflection halts the next step.
+        validity bound below the current deflection halts the next step. A new
+        ``physics_rate`` is the world's: allowed for a rod alone in its world.
         """
         if not isinstance(config, EngineConfig):
             raise ValueError(f'config must be an EngineConfig, got {config!r}')
-        state = self.state
+        if config.physics_rate != self.world.physics_rate:
+            self._own_world().set_physics_rate(config.physics_rate)
         time = self.time
-        stepper = self._make_stepper(config, state)
         old = self.config
-        self.config, self._stepper = config, stepper
-        self._origin, self._steps = time, 0
+        self.config = config
+        self._coefficients = Coefficients.from_params(config.params)
         if config.drive != old.drive:
             self._end_goals(INVALID_GOAL, f'the drive changed to {config.drive!r}')
         elif self.execution is not None:
@@ -805,6 +936,7 @@ class SimulationEngine:
         if config.deflection_limit != old.deflection_limit:
             self._watch_deflection(self.deflection)     # an excursion is judged anew
         self._cache_limits()
+        self.world.changed()
 
     # ----------------------------------------------------------------- health
     def stable_at(self, omega: float) -> bool:

@@ -26,6 +26,7 @@ STEPS_NOT_PAUSED = 'the simulation is not paused'
 STEPS_CANCELLED = 'cancelled'
 STEPS_STOPPING = 'the simulator is stopping'
 STEPS_HALTED = 'halted'
+STEPS_INTERRUPTED = 'interrupted by a reset or a play'
 """The reasons a :class:`StepRequest` ends early (the halt's text follows STEPS_HALTED)."""
 
 
@@ -57,5 +58,6 @@ class StepRequest:
         self._done(StepOutcome(completed, problem))
 
 
-__all__ = ['STEPS_CANCELLED', 'STEPS_HALTED', 'STEPS_NOT_PAUSED', 'STEPS_STOPPING',
+__all__ = ['STEPS_CANCELLED', 'STEPS_HALTED', 'STEPS_INTERRUPTED', 'STEPS_NOT_PAUSED',
+           'STEPS_STOPPING',
            'StepOutcome', 'StepRequest']

@@ -2,7 +2,8 @@
 
 Also the marker throttling, pause and reset.
 
-:class:`RealTimeLoop` drives a :class:`~rotrod_core.live.engine.SimulationEngine` from
+:class:`RealTimeLoop` drives a :class:`~rotrod_core.live.world.World` of rods (or one
+:class:`~rotrod_core.live.engine.SimulationEngine`, in a world of its own) from
 a thread of its own at a fixed step. Each tick integrates in whole steps up to the
 simulated time due now (``real_time_factor`` x wall time; 0 = as fast as possible), so
 simulated time does not drift from the clock; it computes the publications a little
@@ -43,11 +44,13 @@ from rotrod_core.live.execution import Tracking, TrajectoryOutcome
 from rotrod_core.live.lockstep import (
     STEPS_CANCELLED,
     STEPS_HALTED,
+    STEPS_INTERRUPTED,
     STEPS_NOT_PAUSED,
     STEPS_STOPPING,
     StepRequest,
 )
 from rotrod_core.live.pacing import Pacer, StampClock
+from rotrod_core.live.world import World
 from rotrod_core.model.equations import State
 from rotrod_core.numerics.checks import finite_number
 
@@ -171,15 +174,19 @@ class Sample(NamedTuple):
     markers: bool
     tracking: Tracking | None = None
     """The executing trajectory's desired and actual hub state (None: no goal)."""
+    rod: str = ''
+    """The rod's name in its world."""
 
 
 class Status(NamedTuple):
-    """A status report: the engine's health and the loop's own counters."""
+    """A status report: a rod's health and the loop's own counters."""
 
     stamp: float
     level: int
     message: str
     values: tuple
+    rod: str = ''
+    """The rod's name in its world."""
 
 
 class SystemClock:
@@ -208,16 +215,18 @@ class SystemClock:
 
 
 class RealTimeLoop(Generic[SettingsT]):
-    """The engine stepped in real time, commands applied, publications on time.
+    """A world of rods stepped in real time, commands applied, publications on time.
 
     Args:
-        engine: the simulation.
+        world: the simulation: a :class:`~rotrod_core.live.world.World`, or one
+            :class:`~rotrod_core.live.engine.SimulationEngine` (its world).
         settings: :class:`LoopSettings` (or a subclass: the host's settings).
         publish: called in the loop's thread as ``publish(sample, settings, config,
-            snapshot)`` at each sample's due time, with the settings and engine config
-            the sample was computed with and what ``snapshot()`` returned then.
-        publish_status: called with a :class:`Status` at ``diagnostics_rate`` and on a
-            change of level.
+            snapshot)`` for each rod's sample at their due time (every rod's in the
+            same wake-up), with the settings and that rod's engine config the sample
+            was computed with and what ``snapshot()`` returned then.
+        publish_status: called with the list of every rod's :class:`Status` at
+            ``diagnostics_rate`` and on a change of a level.
         snapshot: called under the lock with each tick's samples (e.g. the host's
             estimator, which a reset replaces).
         logger: has ``info``, ``warning``, ``error`` and ``fatal`` (an rclpy logger or
@@ -234,13 +243,13 @@ class RealTimeLoop(Generic[SettingsT]):
             refused or ended), as soon as the engine has it.
     """
 
-    def __init__(self, engine: SimulationEngine, settings: SettingsT, publish, *,
+    def __init__(self, world: World | SimulationEngine, settings: SettingsT, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
                  running=None, inputs=None, ready=None, on_trajectory=None):
-        self.engine = engine
+        self.world = world if isinstance(world, World) else world.world
         self.settings = settings
         self._publish = publish
-        self._publish_status = publish_status or (lambda status: None)
+        self._publish_status = publish_status or (lambda statuses: None)
         self._snapshot = snapshot or (lambda: None)
         self._logger = logger or logging.getLogger(__name__)
         self.clock = clock or SystemClock()
@@ -253,6 +262,8 @@ class RealTimeLoop(Generic[SettingsT]):
         self._stop = threading.Event()
         self.paused = settings.start_paused
         self._step_requests: deque[StepRequest] = deque()
+        self._interrupts = 0
+        """Resets and plays so far: a step request being served ends at the next one."""
         self.steps_taken = 0
         """Physics steps taken on request (:meth:`request_steps`) so far."""
         self.overruns = 0
@@ -262,10 +273,10 @@ class RealTimeLoop(Generic[SettingsT]):
         self.failure: str | None = None
         self._scheduling = scheduling.ThreadScheduling(self._logger, 'physics thread')
         now = self.clock.monotonic()
-        self._pacer = Pacer(settings.real_time_factor, engine.time, now)
+        self._pacer = Pacer(settings.real_time_factor, self.world.time, now)
         self._stamps = StampClock(0.0 if settings.publishes_clock else self.clock.epoch())
         self._countdown = 0
-        self._published = (engine.time, now)     # (simulated, wall) of the last publication
+        self._published = (self.world.time, now)  # (simulated, wall) of the last publication
         self._samples_since_marker = 0
         self._next_marker_wall = 0.0
         self._commands: deque = deque(maxlen=PENDING_COMMANDS)
@@ -274,13 +285,32 @@ class RealTimeLoop(Generic[SettingsT]):
         self.malformed_commands = 0
         """Command messages the host could not read as a command (see :meth:`reject`)."""
         self._drops_logged = 0
-        self._late_logged = 0
-        self._timeouts_logged = engine.timeouts
-        self._last_level: int | None = None
+        self._late_logged: dict[str, int] = {}
+        self._timeouts_logged = {name: e.timeouts for name, e in self.world.engines.items()}
+        self._halts_logged: dict[str, str | None] = {}
+        self._last_levels: tuple = ()
         self._next_status = 0.0
         self._next_level_check = 0.0
         self._quiet_until: dict = {}
         self._thread: threading.Thread | None = None
+
+    @property
+    def engine(self) -> SimulationEngine:
+        """The rod of a world of one (ValueError for a world of several)."""
+        return self._rod(None)
+
+    def _rod(self, name: str | None) -> SimulationEngine:
+        """The rod ``name``, or the only one for None; KeyError or ValueError."""
+        engines = self.world.engines
+        if name is None:
+            if len(engines) != 1:
+                raise ValueError(f'the world holds {len(engines)} rods: name one')
+            return next(iter(engines.values()))
+        return engines[name]
+
+    def _named(self, engine: SimulationEngine, text: str) -> str:
+        """``text`` about ``engine``, naming it when the world holds more than one rod."""
+        return text if len(self.world) == 1 else f'{engine.name}: {text}'
 
     # ----------------------------------------------------------------- logging
     def _log(self, level: str, message: str, key: str | None = None,
@@ -306,7 +336,7 @@ class RealTimeLoop(Generic[SettingsT]):
     @property
     def _publish_steps(self) -> int:
         """Physics steps between publications (publication instants are step instants)."""
-        return max(1, round(self.engine.config.physics_rate / self.settings.publish_rate))
+        return max(1, round(self.world.physics_rate / self.settings.publish_rate))
 
     @property
     def _lead(self) -> float:
@@ -335,27 +365,29 @@ class RealTimeLoop(Generic[SettingsT]):
 
     def stamp_now(self) -> float:
         """The stamp time of the current simulated time, s (lock held)."""
-        return self._stamps.stamp(self.engine.time)
+        return self._stamps.stamp(self.world.time)
 
     def _restart_clock(self) -> None:
         """Re-anchor the wall-to-simulated mapping at the current instant."""
         now = self.clock.monotonic()
-        self._pacer.anchor(self.settings.real_time_factor, self.engine.time, now)
-        self._published = (self.engine.time, now)
+        self._pacer.anchor(self.settings.real_time_factor, self.world.time, now)
+        self._published = (self.world.time, now)
         if not self.settings.publishes_clock:
-            self._stamps.follow_wall(self.engine.time, self.clock.epoch())
+            self._stamps.follow_wall(self.world.time, self.clock.epoch())
 
     # ----------------------------------------------------------------- commands
-    def submit(self, kind: str, value, source: str | None = None) -> None:
-        """Queue a command (any thread; O(1)), stamped with its arrival time.
+    def submit(self, kind: str, value, source: str | None = None,
+               rod: str | None = None) -> None:
+        """Queue a command for ``rod`` (any thread; O(1)), stamped with its arrival time.
 
         ``kind`` is one of :data:`COMMANDS`: 'omega' (``value`` rad/s), 'torque' (N m),
         'trajectory' (a TrajectoryGoal, started at its stamp or its arrival) or
         'cancel_trajectory' (a goal's token); ``source`` names where it came from in log
-        lines (default: the kind's input, see ``inputs``). The loop's thread applies it
-        at the simulated instant it arrived; the oldest of PENDING_COMMANDS pending is
-        dropped (and counted) when a sender outpaces it (a goal dropped so ends with
-        INVALID_GOAL).
+        lines (default: the kind's input, see ``inputs``); ``rod`` the rod's name (None:
+        the world's only rod). The loop's thread applies it at the simulated instant it
+        arrived (a command for a rod gone by then is dropped); the oldest of
+        PENDING_COMMANDS pending is dropped (and counted) when a sender outpaces it (a
+        goal dropped so ends with INVALID_GOAL).
         """
         if kind not in COMMANDS:
             raise ValueError(f'command kind must be one of {COMMANDS}, got {kind!r}')
@@ -370,7 +402,7 @@ class RealTimeLoop(Generic[SettingsT]):
                     dropped[1].token, INVALID_GOAL, 'dropped: commands arrive faster than '
                     f'the simulator applies them (the oldest of {PENDING_COMMANDS} pending)'))
         self._commands.append((kind, value, self.clock.monotonic(),
-                               source or self._inputs.get(kind, kind)))
+                               source or self._inputs.get(kind, kind), rod))
         self._command_arrived.set()
 
     def reject(self, source: str, reason: str) -> None:
@@ -395,7 +427,7 @@ class RealTimeLoop(Generic[SettingsT]):
         arrivals early, and the setpoint shaper relies on delivery delays being
         one-sided (late, not early). The engine moves a time before its own forward.
         """
-        if self.paused or self.engine.halted or not self._pacer.paced:
+        if self.paused or self.world.halted or not self._pacer.paced:
             return None
         if self.settings.publishes_clock:
             sim, wall = self._published
@@ -407,13 +439,22 @@ class RealTimeLoop(Generic[SettingsT]):
 
         Called with the lock held. Each takes effect at the simulated time it arrived.
         """
-        commands, engine, clock = self._commands, self.engine, self.clock
+        commands, clock = self._commands, self.clock
         n = 0
         while commands:
             if deadline is not None and n % 8 == 0 and clock.monotonic() >= deadline:
                 break
             n += 1
-            kind, value, arrived, source = commands.popleft()
+            kind, value, arrived, source, rod = commands.popleft()
+            try:
+                engine = self._rod(rod)
+            except (KeyError, ValueError):
+                self._log('warning', f'{source} dropped: no rod {rod!r} in the world',
+                          'no rod ' + str(rod), 1.0)
+                if kind == 'trajectory':
+                    self._on_trajectory(TrajectoryOutcome(
+                        value.token, INVALID_GOAL, f'no rod {rod!r} in the world'))
+                continue
             timed_out = engine.timed_out_at is not None
             at = self._command_time(arrived)
             try:
@@ -438,46 +479,72 @@ class RealTimeLoop(Generic[SettingsT]):
                       f'{PENDING_COMMANDS} pending)', 'dropped', 1.0)
             self._drops_logged = self.dropped_commands
         self._report_outcomes()
-        if self.engine.late_setpoints != self._late_logged:
-            self._log('warning', f'{self.engine.late_setpoints} angular-velocity setpoints '
-                      'so far arrived after their due time (the stream stalled for longer '
-                      'than setpoint_delay): meanwhile w followed the stream\'s '
-                      'extrapolation', 'late setpoints', 1.0)
-            self._late_logged = self.engine.late_setpoints
+        for name, engine in self.world.engines.items():
+            late = engine.late_setpoints
+            if late != self._late_logged.get(name, 0):
+                self._log('warning', self._named(engine, f'{late} angular-velocity setpoints '
+                          'so far arrived after their due time (the stream stalled for longer '
+                          'than setpoint_delay): meanwhile w followed the stream\'s '
+                          'extrapolation'), 'late setpoints ' + name, 1.0)
+                self._late_logged[name] = late
+
+    @property
+    def late_setpoints(self) -> int:
+        """Late setpoints of every rod so far (see SimulationEngine.late_setpoints)."""
+        return sum(e.late_setpoints for e in self.world)
 
     def _report_outcomes(self) -> None:
-        """Hand the engine's trajectory outcomes to the host, oldest first."""
-        outcomes = self.engine.trajectory_outcomes
+        """Hand the rods' trajectory outcomes to the host, oldest first."""
+        for engine in self.world:
+            self._report_outcomes_of(engine)
+
+    def _report_outcomes_of(self, engine: SimulationEngine) -> None:
+        """Hand ``engine``'s trajectory outcomes to the host (a rod leaving the world too)."""
+        outcomes = engine.trajectory_outcomes
         while outcomes:
             self._on_trajectory(outcomes.popleft())
 
     def _log_timeout(self) -> None:
         """Warn once per command-timeout event (throttled: a flapping stream cannot flood)."""
-        eng = self.engine
-        if eng.timeouts == self._timeouts_logged:
-            return
-        self._timeouts_logged = eng.timeouts
-        if eng.timed_out_at is None:       # already over (a halt and a reset since)
-            return
-        cfg = eng.config
-        action = (f'spinning down to 0 at max_angular_acceleration '
-                  f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
-                  else 'hub torque set to 0 (free coast)')
-        kind = 'omega' if cfg.drive == 'velocity' else 'torque'
-        self._log('warning', f'no command on {self._inputs[kind]} for '
-                  f'{cfg.command_timeout:g} s (command_timeout) at simulated time '
-                  f'{eng.timed_out_at:.3f} s: {action}', 'timeout', 1.0)
+        for name, eng in self.world.engines.items():
+            if eng.timeouts == self._timeouts_logged.get(name, 0):
+                continue
+            self._timeouts_logged[name] = eng.timeouts
+            if eng.timed_out_at is None:       # already over (a halt and a reset since)
+                continue
+            cfg = eng.config
+            action = (f'spinning down to 0 at max_angular_acceleration '
+                      f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
+                      else 'hub torque set to 0 (free coast)')
+            kind = 'omega' if cfg.drive == 'velocity' else 'torque'
+            self._log('warning', self._named(eng, f'no command on {self._inputs[kind]} for '
+                      f'{cfg.command_timeout:g} s (command_timeout) at simulated time '
+                      f'{eng.timed_out_at:.3f} s: {action}'), 'timeout ' + name, 1.0)
+
+    def _log_halts(self) -> None:
+        """Log each rod's halt once (an error: the rod stands still until a reset)."""
+        for name, eng in self.world.engines.items():
+            if eng.halted != self._halts_logged.get(name):
+                self._halts_logged[name] = eng.halted
+                if eng.halted:
+                    self._logger.error(self._named(eng, f'simulation halted: {eng.halted}; '
+                                                        'call ~/reset'))
 
     # ----------------------------------------------------------------- control
     def reconfigure(self, config, settings: SettingsT) -> None:
-        """Switch to a (validated) engine config and settings, keeping state and clock.
+        """Switch to (validated) engine configs and settings, keeping states and clock.
 
-        Commands that came before the change are applied first, under the old config.
+        ``config``: an EngineConfig for a world of one rod, else a mapping of rod names
+        to their new configs (the others keep theirs). Commands that came before the
+        change are applied first, under the old config.
         """
+        configs = config if isinstance(config, dict) else {self.engine.name: config}
         with self.lock:
             self._apply_commands()
-            if config != self.engine.config:
-                self.engine.reconfigure(config)
+            for name, cfg in configs.items():
+                engine = self.world.engines[name]
+                if cfg != engine.config:
+                    engine.reconfigure(cfg)
             old, self.settings = self.settings, settings
             if settings.real_time_factor != old.real_time_factor:
                 self._restart_clock()
@@ -496,26 +563,34 @@ class RealTimeLoop(Generic[SettingsT]):
         """
         with self.lock:
             self._commands.clear()
-            was_halted = self.engine.halted if state else None
+            self._interrupts += 1            # a step request being served ends here
+            was_halted = None
+            if state:
+                halts = [(n, e.halted) for n, e in self.world.engines.items() if e.halted]
+                if halts:
+                    was_halted = halts[0][1] if len(self.world) == 1 else '; '.join(
+                        f'{n}: {h}' for n, h in halts)
             if time:
-                self.engine.reset_time()
+                self.world.reset_time()
                 self._countdown = 0
             if state:
-                self.engine.reset()
+                for engine in self.world:
+                    engine.reset()
             self._restart_clock()
             self._report_outcomes()
-            return was_halted, self.engine.time
+            return was_halted, self.world.time
 
     def pause(self, paused: bool) -> str:
         """Pause (True) or resume (False) simulated time; what was done, as a sentence."""
         with self.lock:
             if paused and not self.paused:
                 self.paused = True
-                return f'paused at simulated time {self.engine.time:.3f} s'
+                return f'paused at simulated time {self.world.time:.3f} s'
             if not paused and self.paused:
                 self.paused = False
+                self._interrupts += 1        # a step request being served ends here
                 self._restart_clock()
-                return f'resumed at simulated time {self.engine.time:.3f} s'
+                return f'resumed at simulated time {self.world.time:.3f} s'
             return 'already ' + ('paused' if self.paused else 'running')
 
     # ----------------------------------------------------------------- lockstep
@@ -539,8 +614,8 @@ class RealTimeLoop(Generic[SettingsT]):
                 return STEPS_STOPPING
             if not self.paused:
                 return STEPS_NOT_PAUSED
-            if self.engine.halted:
-                return f'{STEPS_HALTED}: {self.engine.halted}; reset first'
+            if self.world.halted:
+                return f'{STEPS_HALTED}: {self.world.halted}; reset first'
             self._step_requests.append(request)
         self._command_arrived.set()                     # wake the thread
         return None
@@ -548,18 +623,26 @@ class RealTimeLoop(Generic[SettingsT]):
     def _serve_steps(self, request: StepRequest) -> None:
         """Take a request's steps and publish what falls due (the loop's thread).
 
-        Under the lock throughout: a service or parameter change waits for the end.
+        Under the lock from one publication instant to the next, not longer: between
+        them a service or a parameter change takes its turn. A reset, a play or a stop
+        (:attr:`_interrupts`) and a cancel end the request at the next publication
+        instant, so no request, however many steps it asks, takes the world away
+        from its users.
         """
-        eng = self.engine
         completed, problem = 0, None
         with self.lock:
+            interrupts = self._interrupts
             if not self.paused:
                 problem = STEPS_NOT_PAUSED
             else:
                 self._apply_commands()
-            while problem is None:
+        while problem is None:
+            with self.lock:
+                if self._interrupts != interrupts:
+                    problem = STEPS_INTERRUPTED
+                    break
                 if self._countdown == 0:                  # due, not yet published
-                    self._publish_now(self._sample())
+                    self._publish_now()
                     self._countdown = self._publish_steps
                 if completed == request.steps:
                     break
@@ -571,28 +654,38 @@ class RealTimeLoop(Generic[SettingsT]):
                     problem = STEPS_STOPPING
                 else:
                     n = min(self._countdown, request.steps - completed)
-                    done = eng.advance(n)
+                    done = self.world.advance(n)
                     completed += done
                     self.steps_taken += done
                     self._countdown -= done
+                    self._log_halts()
                     if done < n:
-                        problem = f'{STEPS_HALTED}: {eng.halted}'
-                        self._logger.error(f'simulation halted: {eng.halted}; reset')
-            self._log_timeout()
+                        problem = f'{STEPS_HALTED}: {self.world.halted}'
+                self._log_timeout()
         self.report()
         request.finish(completed, problem)
 
-    def _publish_now(self, sample: Sample) -> None:
-        """Publish ``sample`` at once, with the current settings (lock held)."""
-        self._send(sample, (self.settings, self.engine.config, self._snapshot()))
+    def _context(self) -> tuple:
+        """What samples are computed with: (settings, each rod's config, snapshot)."""
+        return (self.settings, {n: e.config for n, e in self.world.engines.items()},
+                self._snapshot())
 
-    def _send(self, sample: Sample, context: tuple) -> None:
-        """Hand ``sample`` to the host and count it.
+    def _publish_now(self) -> None:
+        """Publish every rod's state now, with the current settings (lock held)."""
+        self._send(self._samples(), self._context())
 
-        ``context``: the (settings, config, snapshot) it was computed with.
+    def _send(self, samples: list, context: tuple) -> None:
+        """Hand each rod's sample of an instant to the host (one wake-up) and count them.
+
+        ``context``: the (settings, configs by rod, snapshot) they were computed with.
         """
-        self._published = (sample.time, self.clock.monotonic())
-        self._publish(sample, *context)
+        if not samples:
+            return
+        settings, configs, snapshot = context
+        self._published = (samples[0].time, self.clock.monotonic())
+        publish = self._publish
+        for sample in samples:
+            publish(sample, settings, configs[sample.rod], snapshot)
         self.publications += 1
 
     def _finish_step_requests(self, problem: str) -> None:
@@ -654,23 +747,23 @@ class RealTimeLoop(Generic[SettingsT]):
                 self._restart_clock()
         with self.lock:
             self._apply_commands(deadline=self.clock.monotonic() + TICK_COMMAND_BUDGET)
-            samples, wake = self._tick()
+            instants, wake = self._tick()
             # what the samples were computed with, also if a service or a parameter
             # change replaces it while they are being published
-            context = self.settings, self.engine.config, self._snapshot()
+            context = self._context()
         spin = self._spin
-        for sample in samples:
-            if sample.due is not None and not self.clock.sleep_until(sample.due, self._stop,
-                                                                     spin):
+        for samples in instants:          # every rod's sample of an instant in one wake-up
+            due = samples[0].due if samples else None
+            if due is not None and not self.clock.sleep_until(due, self._stop, spin):
                 return False
-            self._send(sample, context)
+            self._send(samples, context)
         self.report()
         # the next tick is due at an absolute time: the publication's wait and the work
         # after it (estimate, status) must not delay it
         return wake is None or self._idle_until(wake)
 
-    def _sample(self) -> Sample:
-        eng = self.engine
+    def _samples(self) -> list[Sample]:
+        """Every running rod's sample of now (a halted rod's too while others run)."""
         self._samples_since_marker += 1
         markers = self.settings.markers and self._samples_since_marker >= self._marker_every
         if markers:
@@ -682,56 +775,59 @@ class RealTimeLoop(Generic[SettingsT]):
             if markers:
                 self._samples_since_marker = 0
                 self._next_marker_wall = now + 0.5 / self.settings.marker_rate
-        due = self._pacer.wall_time(eng.time) if self._pacer.paced and not self.paused else None
-        return Sample(due, eng.time, self._stamps.stamp(eng.time), eng.state, eng.torque,
-                      eng.frequencies(), eng.inertial_position(), markers, eng.tracking())
+        t = self.world.time
+        due = self._pacer.wall_time(t) if self._pacer.paced and not self.paused else None
+        stamp = self._stamps.stamp(t)
+        return [Sample(due, t, stamp, eng.state, eng.torque, eng.frequencies(),
+                       eng.inertial_position(), markers, eng.tracking(), name)
+                for name, eng in self.world.engines.items()]
 
     def _tick(self) -> tuple[list, float | None]:
         """Integrate up to the time due now (lock held).
 
-        Returns the samples to publish and the monotonic wall time at which the next
-        tick is due (None: at once).
+        Returns the samples to publish (a list of every rod's per instant) and the
+        monotonic wall time at which the next tick is due (None: at once).
         """
-        eng = self.engine
+        world = self.world
         if self._ready is not None:
             if not self._ready():
                 return [], self.clock.monotonic() + READY_WAIT
             self._ready = None                  # started: simulated time runs from now
             self._restart_clock()
-        if self.paused or eng.halted:
+        if self.paused or world.halted or not len(world):
             return [], self.clock.monotonic() + IDLE_WAIT
         pacer = self._pacer
         if pacer.paced:
             now = self.clock.monotonic()
             target = pacer.sim_time(now + self._lead)
-            if target - eng.time > MAX_BACKLOG * pacer.factor:
+            if target - world.time > MAX_BACKLOG * pacer.factor:
                 self.overruns += 1
-                self._log('warning', f'fell {target - eng.time:.3f} s of simulated time '
+                self._log('warning', f'fell {target - world.time:.3f} s of simulated time '
                           'behind the clock; skipping ahead', 'backlog', 5.0)
                 self._restart_clock()
-                target = eng.time
-        samples = []
+                target = world.time
+        instants = []
         while True:
             n = self._countdown
             if pacer.paced:
-                n = min(n, eng.steps_until(target))
+                n = min(n, world.steps_until(target))
                 if n == 0 and self._countdown > 0:
                     break
-            done = eng.advance(n)
+            done = world.advance(n)
             self._countdown -= done
-            if done < n:                      # halted
-                self._logger.error(f'simulation halted: {eng.halted}; call ~/reset')
+            self._log_halts()
+            if done < n:                      # every rod halted
                 break
             if self._countdown == 0:
-                samples.append(self._sample())
+                instants.append(self._samples())
                 self._countdown = self._publish_steps
                 if not pacer.paced:
                     break
         self._log_timeout()
         wake = None
-        if pacer.paced and not eng.halted:
-            wake = pacer.wall_time(eng.time + self._countdown * eng.dt) - self._lead
-        return samples, wake
+        if pacer.paced and not world.halted:
+            wake = pacer.wall_time(world.time + self._countdown * world.dt) - self._lead
+        return instants, wake
 
     def _idle_until(self, wake: float) -> bool:
         """Apply commands as they come until monotonic time ``wake``; False if stopping."""
@@ -762,12 +858,12 @@ class RealTimeLoop(Generic[SettingsT]):
 
     # ----------------------------------------------------------------- status
     def report(self, force: bool = False) -> None:
-        """Send a :class:`Status` if the level changed, it is due, or ``force``.
+        """Send every rod's :class:`Status` if a level changed, it is due, or ``force``.
 
-        The level is looked at most every LEVEL_CHECK wall seconds (as fast as
+        The levels are looked at most every LEVEL_CHECK wall seconds (as fast as
         possible a cycle is one publication: thousands a second).
         """
-        if self.engine.trajectory_outcomes:
+        if any(e.trajectory_outcomes for e in self.world):
             with self.lock:
                 self._report_outcomes()
         now = self.clock.monotonic()
@@ -775,20 +871,25 @@ class RealTimeLoop(Generic[SettingsT]):
             return
         self._next_level_check = now + LEVEL_CHECK
         with self.lock:
-            level, message = self.engine.condition()
+            conditions = [(name, *e.condition()) for name, e in self.world.engines.items()]
             if self.failure:
-                level, message = ERROR, self.failure
+                conditions = [(name, ERROR, self.failure) for name, _, _ in conditions]
             elif self.paused:
-                message = 'paused; ' + message
+                conditions = [(name, level, 'paused; ' + message)
+                              for name, level, message in conditions]
+            levels = tuple((name, level) for name, level, _ in conditions)
             now = self.clock.monotonic()
-            if not force and level == self._last_level and now < self._next_status:
+            if not force and levels == self._last_levels and now < self._next_status:
                 return
-            self._last_level = level
+            self._last_levels = levels
             self._next_status = now + 1.0 / self.settings.diagnostics_rate
-            values = (*self.engine.status_values(), ('paused', self.paused),
-                      ('real_time_factor', self.settings.real_time_factor),
-                      ('overruns', self.overruns), ('publications', self.publications),
-                      ('dropped_commands', self.dropped_commands),
-                      ('malformed_commands', self.malformed_commands))
-            stamp = self._stamps.stamp(self.engine.time)
-        self._publish_status(Status(stamp, level, message, values))
+            loop_values = (('paused', self.paused),
+                           ('real_time_factor', self.settings.real_time_factor),
+                           ('overruns', self.overruns), ('publications', self.publications),
+                           ('dropped_commands', self.dropped_commands),
+                           ('malformed_commands', self.malformed_commands))
+            stamp = self._stamps.stamp(self.world.time)
+            statuses = [Status(stamp, level, message,
+                               (*self.world.engines[name].status_values(), *loop_values), name)
+                        for name, level, message in conditions]
+        self._publish_status(statuses)

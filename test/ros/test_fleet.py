@@ -1,8 +1,8 @@
 """A fleet of rods from one command (python -m rotrod_ros.fleet), and its launch file.
 
-Three rods, each streamed the paper's Eq. 26 by its own profile publisher: every rod
-publishes in its own namespace and frames at the full rate, and its tip moves as the
-offline model says for the speed that rod published.
+Three rods in one world (one simulator process), each streamed the paper's Eq. 26 by its
+own profile publisher: every rod publishes in its own namespace and frames at the full
+rate, and its tip moves as the offline model says for the speed that rod published.
 """
 
 import ast
@@ -53,17 +53,18 @@ def test_three_rods_from_one_command_each_on_its_own_stream(ros_processes, ros_n
     stop = time.time()              # the stamps are wall-clock times (real time, no /clock)
     os.kill(proc.pid, signal.SIGINT)            # Ctrl-C: the fleet stops every node
     assert proc.wait(timeout=30) == 0
+    # the world published at the full rate: one sample of every rod per 10 ms of its
+    # simulated time (as its log says on stopping)
+    log = (tmp_path / 'world_simulator.log').read_text()
+    assert 'ready' in log
+    stopped = stop_report(log)
+    assert stopped, log[-2000:]
+    t_stop, published = stopped.time, stopped.publications
+    assert abs(published - (math.floor(t_stop * 100 + 1e-6) + 1)) <= 1, (t_stop, published)
     for ns in fleet.namespaces(RODS):
-        # every rod published at the full rate: one sample per 10 ms of its simulated time
-        # (as its log says on stopping), every publication (KEEP_LAST depth 100) on the
-        # 10 ms grid; the observer of this test, an ordinary Python process sharing two
-        # cores with six real-time ones, may miss some while it waits for a core
-        log = (tmp_path / f'{ns[1:]}_simulator.log').read_text()
-        assert 'ready' in log
-        stopped = stop_report(log)
-        assert stopped, log[-2000:]
-        t_stop, published = stopped.time, stopped.publications
-        assert abs(published - (math.floor(t_stop * 100 + 1e-6) + 1)) <= 1, (t_stop, published)
+        # every publication (KEEP_LAST depth 100) of every rod on the 10 ms grid; the
+        # observer of this test, an ordinary Python process sharing two cores with four
+        # real-time ones, may miss some while it waits for a core
         # the true state by stamp: t, theta, w, u, v, du, dv (the tip joints)
         rows = np.array(sorted((stamp(j), j.position[0], j.velocity[0], j.position[1],
                                 j.position[2], j.velocity[1], j.velocity[2])
@@ -108,7 +109,16 @@ def test_bad_fleet_sizes_are_refused_with_the_reason():
 
 
 def test_fleet_commands_name_every_rod_its_namespace_files_and_frames():
+    # one world by default: one simulator holding rods:=2 (rod0/, rod1/), a publisher each
     cmds = fleet.fleet_commands(2, profile=True)
+    assert sorted(cmds) == ['rod0_profile_publisher', 'rod1_profile_publisher',
+                            'world_simulator']
+    world = cmds['world_simulator']
+    assert 'rods:=2' in world and '__ns:=/rod1' in cmds['rod1_profile_publisher']
+    files = [world[i + 1] for i, a in enumerate(world) if a == '--params-file']
+    assert [Path(f).name for f in files] == ['table1.yaml', 'fleet.yaml']
+    # --processes: a simulator per rod in its namespace, its frames prefixed
+    cmds = fleet.fleet_commands(2, profile=True, processes=True)
     assert sorted(cmds) == ['rod0_profile_publisher', 'rod0_simulator',
                             'rod1_profile_publisher', 'rod1_simulator']
     sim = cmds['rod1_simulator']

@@ -43,11 +43,16 @@ SIMULATOR_PARAMS = ('-p', 'real_time_factor:=2.0', '-p', 'max_angular_accelerati
                     '-p', f'physics_rate:={PHYSICS_RATE}')
 FEATURES = {SimulatorFeatures.ENTITY_STATE_GETTING, SimulatorFeatures.SIMULATION_RESET,
             SimulatorFeatures.SIMULATION_RESET_TIME, SimulatorFeatures.SIMULATION_RESET_STATE,
+            SimulatorFeatures.SIMULATION_RESET_SPAWNED,
             SimulatorFeatures.SIMULATION_STATE_GETTING,
             SimulatorFeatures.SIMULATION_STATE_SETTING,
             SimulatorFeatures.SIMULATION_STATE_PAUSE, SimulatorFeatures.STEP_SIMULATION_SINGLE,
             SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
-            SimulatorFeatures.STEP_SIMULATION_ACTION}
+            SimulatorFeatures.STEP_SIMULATION_ACTION, SimulatorFeatures.SPAWNING,
+            SimulatorFeatures.DELETING, SimulatorFeatures.ENTITY_CATEGORIES,
+            SimulatorFeatures.SPAWNING_RESOURCE_STRING, SimulatorFeatures.ENTITY_STATE_SETTING,
+            SimulatorFeatures.ENTITY_INFO_GETTING, SimulatorFeatures.SPAWNABLES,
+            SimulatorFeatures.SPAWNING_ENTITIES}
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6          # action_msgs/GoalStatus
 SEPARATE_PREFIX = Path(sys.prefix) / 'test-cache' / 'simulation_interfaces_client'
 """Where the long test builds the client's own simulation_interfaces (kept while current)."""
@@ -111,7 +116,7 @@ def check_report(report: dict) -> None:
     bad = report['bad']
     assert bad['codes'] == {
         'step_0': Result.RESULT_OPERATION_FAILED, 'unknown_entity': Result.RESULT_NOT_FOUND,
-        'scope_spawned': Result.RESULT_FEATURE_UNSUPPORTED,
+        'steps_past_bound': Result.RESULT_OPERATION_FAILED,
         'pause_again': SetSimulationState.Response.ALREADY_IN_TARGET_STATE,
         'no_world': SetSimulationState.Response.INCORRECT_TRANSITION,
         'unknown_state': SetSimulationState.Response.INCORRECT_TRANSITION,

@@ -34,7 +34,6 @@ from rotrod_core.live.engine import (
     fastest_rate,
     foreshortening,
 )
-from rotrod_core.numerics.checks import NonFiniteStateError
 
 
 def hann_mean(x):
@@ -223,9 +222,10 @@ def test_a_non_finite_step_halts_and_keeps_the_state(monkeypatch):
     eng.advance(100)
     kept = eng.state
 
-    def broken(*_):
-        raise NonFiniteStateError('boom')
-    monkeypatch.setattr(eng._stepper, 'step_velocity', broken)
+    def broken(accelerations, state, h, omega_dot):     # the kernel gives NaN
+        return tuple(math.nan for _ in state)
+    import rotrod_core.live.world as world
+    monkeypatch.setattr(world, 'rk4_step_prescribed_rotation', broken)
     assert not eng.step()
     assert 'non-finite' in eng.halted and eng.state == kept
     assert eng.health().level == ERROR

@@ -110,7 +110,7 @@ class Run:
         self.engine = SimulationEngine(config or EngineConfig())
         self.loop = RealTimeLoop(
             self.engine, LoopSettings(**settings), self._publish,
-            publish_status=self.statuses.append, logger=self.log, clock=self.clock,
+            publish_status=self.statuses.extend, logger=self.log, clock=self.clock,
             inputs={'omega': 'cmd/omega', 'torque': 'cmd/torque'})
 
     def _publish(self, sample, settings, config, snapshot):
@@ -153,14 +153,14 @@ def test_in_real_time_each_publication_is_sent_at_its_simulated_instant():
 def test_a_tick_integrates_its_publication_the_lead_ahead_of_its_due_time():
     run = Run()
     ticks = []                      # (clock time, simulated time reached) per integration
-    advance = run.engine.advance
+    advance = run.engine.world.advance
 
     def recorded(steps):
         done = advance(steps)
         ticks.append((run.clock.now, run.engine.time))
         return done
 
-    run.engine.advance = recorded
+    run.engine.world.advance = recorded
     run.until_wall(0.5)
     # after the first tick (at the start: up to LEAD), each 10 ms of simulated time is
     # integrated in one go, LEAD before it is due

@@ -1,0 +1,387 @@
+"""A world of rods on one simulated clock, stepped as one batch.
+
+Every rod is a :class:`~rotrod_core.live.engine.SimulationEngine`: its own drive,
+commands, shaping, trajectory, alarms and halt. The world owns the clock and the
+physics: it advances all rods together at one ``physics_rate``, through the one
+propagation kernel (:func:`~rotrod_core.numerics.rk4.rk4_step_prescribed_rotation`
+and :func:`~rotrod_core.numerics.rk4.rk4_step` over
+:func:`~rotrod_core.model.equations.deflection_accelerations`), vectorised across the
+rods of each drive: a step is one pass of numpy over all of them, never a Python loop
+per rod.
+
+It works in blocks of steps (up to the next publication), as Gazebo's systems run
+commands -> physics -> checks over every entity at once:
+
+1. each rod says what drives it over the block (:meth:`SimulationEngine._block_inputs
+   <rotrod_core.live.engine.SimulationEngine._block_inputs>`): the hub's target w at
+   every step instant (velocity drive: its setpoint shaping or trajectory, vectorised
+   over the block) or its torque at every step (torque drive); a rod whose command
+   changes course within the block (a trajectory that starts or ends) shortens the
+   block to that step;
+2. the world takes the block's steps, each one batched over the rods of a drive; a rod
+   whose step gives a non-finite state, a deflection past its validity bound or a
+   speed past its ``max_omega`` is frozen at its last good state from that step on,
+   and the others go on;
+3. each rod takes its block's states (:meth:`SimulationEngine._block_done
+   <rotrod_core.live.engine.SimulationEngine._block_done>`): its deflection watch, its
+   halt, its trajectory's end.
+
+A single rod steps as Python floats through the same functions (numpy's per-call cost
+would be ten times the arithmetic); a batch of several as arrays. The results are the
+same arithmetic either way, and deterministic: the same commands at the same simulated
+times give the same states, bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from functools import partial
+from typing import Any, Protocol
+
+import numpy as np
+
+import rotrod_core.model.equations as model
+from rotrod_core.model.equations import Coefficients
+from rotrod_core.numerics.checks import finite_number
+from rotrod_core.numerics.rk4 import rk4_step, rk4_step_prescribed_rotation
+
+BLOCK_STEPS = 64
+"""Most steps of one block (a caller that asks for more gets them in several)."""
+NON_FINITE, TOO_FAR, TOO_FAST = 1, 2, 3
+"""Why a rod's step was refused: a non-finite state (or drive value), a deflection past
+the validity bound, |w| past max_omega."""
+
+
+class Rod(Protocol):
+    """What the world needs of a rod (:class:`~rotrod_core.live.engine.SimulationEngine`)."""
+
+    config: Any
+    halted: str | None
+    _coefficients: Coefficients
+
+    @property
+    def state(self) -> tuple: ...
+
+    def _block_limit(self, t0: float, steps: int) -> int: ...
+
+    def _block_inputs(self, t0: float, steps: int) -> np.ndarray: ...
+
+    def _block_done(self, t0: float, record: BlockRecord) -> None: ...
+
+    def _time_reset(self) -> None: ...
+
+
+def _stacked(coefficients: list[Coefficients]) -> Coefficients:
+    """The coefficients of several rods as one batch (arrays), or the one rod's."""
+    if len(coefficients) == 1:
+        return coefficients[0]
+    names = ('mass', 'eccentricity', 'hub_inertia', 'k1', 'k2', 'c1', 'c2', 'w1sq', 'w2sq',
+             'g1', 'g2', 'modal_mass', 'eccentric_mass', 'load_radius', 'rotor_inertia')
+    return Coefficients(**{n: np.array([getattr(c, n) for c in coefficients], dtype=float)
+                           for n in names})
+
+
+class BlockRecord:
+    """The states one rod went through over a block (SI units).
+
+    ``taken`` steps were good; ``rejected`` is (reason, the refused state, drive value)
+    of the step after them, if one was refused. ``last`` holds the last good step's
+    (u, v, u', v', theta, w, w', torque); ``r_max`` the largest deflection
+    sqrt(u^2 + v^2) over the block (m, 0 without steps), and :attr:`r` each step's
+    (read only where needed: a crossing of the critical deflection).
+    """
+
+    __slots__ = ('_steps', '_index', 'last', 'r_max', 'taken', 'rejected')
+
+    def __init__(self, steps: np.ndarray, index: int, taken: int, rejected, last,
+                 r_max: float):
+        self._steps, self._index = steps, index        # (steps, 9, rods): the group's
+        self.taken, self.rejected, self.last, self.r_max = taken, rejected, last, r_max
+
+    @property
+    def r(self) -> np.ndarray:
+        """The deflection at each good step, m."""
+        return self._steps[:self.taken, 8, self._index]
+
+
+def _values(row, times: np.ndarray) -> np.ndarray:
+    """A rod's block inputs as one value per step (see SimulationEngine._block_inputs)."""
+    if isinstance(row, tuple):
+        w0, w1, t0, t1 = row
+        return w0 + (w1 - w0) * ((times - t0) / (t1 - t0))
+    return np.broadcast_to(np.asarray(row, dtype=float), times.shape)
+
+
+def _matrix(rows: list, times: np.ndarray) -> np.ndarray:
+    """Block inputs of several rods as (rods, steps): the compact ones in one pass."""
+    if all(isinstance(r, tuple) for r in rows):
+        w0, w1, t0, t1 = (np.array(c, dtype=float)[:, None] for c in zip(*rows))
+        return w0 + (w1 - w0) * ((times[None, :] - t0) / (t1 - t0))
+    if all(isinstance(r, float) for r in rows):
+        return np.broadcast_to(np.array(rows)[:, None], (len(rows), len(times)))
+    return np.stack([_values(r, times) for r in rows])
+
+
+class _Group:
+    """Rods of one drive and coupling, stepped together (arrays, or floats for one)."""
+
+    def __init__(self, drive: str, coupling: str, engines: list):
+        self.drive, self.coupling = drive, coupling
+        self.engines = engines
+        self.single = len(engines) == 1
+        self.co = _stacked([e._coefficients for e in engines])
+        cfg = [e.config for e in engines]
+        self.max_deflection = self._column([c.max_deflection for c in cfg])
+        self.max_omega = self._column([c.max_omega for c in cfg])
+        self._accelerations = partial(model.deflection_accelerations, self.co)
+        self._torque_rates = partial(model.torque_drive_rates, self.co, coupling=coupling)
+
+    def _column(self, values):
+        return values[0] if self.single else np.array(values, dtype=float)
+
+    def run(self, rows: list, times: np.ndarray, dt: float) -> list[BlockRecord]:
+        """Take a step of dt (s) at each of ``times`` (their ends) under ``rows``."""
+        if self.single:
+            return [self._run_one(_values(rows[0], times).tolist(), dt)]
+        return self._run_many(_matrix(rows, times), dt)
+
+    def _step(self, state, value, dt: float):
+        """One step of every rod: (new state, w', torque) under ``value`` per rod."""
+        if self.drive == 'velocity':
+            wd = (value - state[5]) / dt
+            u, v, du, dv, theta, _ = rk4_step_prescribed_rotation(self._accelerations, state,
+                                                                   dt, wd)
+            new = (u, v, du, dv, theta, value)     # the drive imposes w: exactly its target
+            return new, wd, model.hub_torque(self.co, new, wd, self.coupling)
+        new = rk4_step(self._torque_rates, state, dt, value, value, value)
+        wd = model.hub_angular_acceleration(self.co, new, value, self.coupling)
+        return new, wd, value
+
+    def _run_one(self, values: list, dt: float) -> BlockRecord:
+        """The block of a rod alone, in Python floats."""
+        state = tuple(self.engines[0].state)
+        rows: list = []
+        rejected = None
+        isfinite, hypot, step = math.isfinite, math.hypot, self._step
+        max_deflection, max_omega = self.max_deflection, self.max_omega
+        for value in values:
+            try:
+                new, wd, drive = step(state, value, dt)
+            except ZeroDivisionError:          # no rotary inertia at all: w' undefined
+                rejected = (NON_FINITE, state, math.nan)
+                break
+            u, v, du, dv, theta, omega = new
+            if not (isfinite(u) and isfinite(v) and isfinite(du) and isfinite(dv)
+                    and isfinite(theta) and isfinite(omega) and isfinite(wd)
+                    and isfinite(drive)):
+                rejected = (NON_FINITE, new, drive)
+                break
+            r = hypot(u, v)
+            if r > max_deflection:
+                rejected = (TOO_FAR, new, drive)
+                break
+            if abs(omega) > max_omega:
+                rejected = (TOO_FAST, new, drive)
+                break
+            state = new
+            rows.append((*new, wd, drive, r))
+        steps = np.array(rows, dtype=float).reshape(len(rows), 9)[:, :, None]
+        return BlockRecord(steps, 0, len(rows), rejected, rows[-1][:8] if rows else None,
+                           max((row[8] for row in rows), default=0.0))
+
+    def _run_many(self, inputs: np.ndarray, dt: float) -> list[BlockRecord]:
+        """The block of several rods, each step one pass over the arrays."""
+        n, steps = inputs.shape
+        state = tuple(np.array(column, dtype=float)
+                      for column in zip(*(tuple(e.state) for e in self.engines)))
+        rows = []
+        alive = np.ones(n, dtype=bool)
+        taken = np.full(n, steps)
+        rejected: list = [None] * n
+        max_deflection, max_omega = self.max_deflection, self.max_omega
+        for k in range(steps):
+            with np.errstate(all='ignore'):
+                new, wd, drive = self._step(state, inputs[:, k], dt)
+                r = np.hypot(new[0], new[1])
+                # one sum is not finite if any term is not: the usual step checks once
+                total = new[0] + new[1] + new[2] + new[3] + new[4] + new[5] + wd + drive
+                good = (np.isfinite(total).all() and (r <= max_deflection).all()
+                        and (np.abs(new[5]) <= max_omega).all())
+            if not good:
+                new, wd, drive, r = self._refuse(k, state, new, wd, drive, r, alive, taken,
+                                                 rejected)
+            state = new
+            rows.append((*new, wd, np.broadcast_to(drive, (n,)), r))
+        out = np.array(rows)                                  # (steps, 9, rods)
+        r_max = out[:, 8, :].max(axis=0).tolist()
+        last = out[-1, :8, :].T.tolist()
+        records = []
+        for i in range(n):
+            t = int(taken[i])
+            row = last[i] if t == steps else (out[t - 1, :8, i].tolist() if t else None)
+            records.append(BlockRecord(out, i, t, rejected[i], row, r_max[i]))
+        return records
+
+    def _refuse(self, k: int, state, new, wd, drive, r, alive, taken, rejected):
+        """Freeze the rods whose step ``k`` was refused at their last good ``state``."""
+        n = len(alive)
+        drive = np.broadcast_to(drive, (n,))
+        with np.errstate(all='ignore'):
+            finite = np.isfinite(wd) & np.isfinite(drive)
+            for x in new:
+                finite &= np.isfinite(x)
+            far = finite & (r > self.max_deflection)
+            fast = finite & ~far & (np.abs(new[5]) > self.max_omega)
+        bad = alive & (~finite | far | fast)
+        for i in np.flatnonzero(bad):
+            reason = NON_FINITE if not finite[i] else TOO_FAR if far[i] else TOO_FAST
+            rejected[i] = (reason, tuple(float(x[i]) for x in new), float(drive[i]))
+            taken[i] = k
+        alive &= ~bad
+        return (tuple(np.where(alive, x, s) for x, s in zip(new, state)),
+                np.where(alive, wd, 0.0), np.where(alive, drive, 0.0),
+                np.where(alive, r, 0.0))
+
+
+class World:
+    """Rods on one clock at one physics rate (Hz), stepped as one batch.
+
+    The simulated clock :attr:`time` (s) starts at 0 and only moves forward, but for
+    :meth:`reset_time`. Rods are added and removed between steps (:meth:`add`,
+    :meth:`remove`), each a :class:`~rotrod_core.live.engine.SimulationEngine` whose
+    ``physics_rate`` must be the world's.
+    """
+
+    def __init__(self, physics_rate: float):
+        self._rate = finite_number('physics_rate', physics_rate, positive=True)
+        self._origin = 0.0
+        self._steps = 0
+        self.engines: dict[str, Any] = {}
+        """The rods by name (:class:`Rod`: SimulationEngine), in the order they came."""
+        self._groups: list[_Group] | None = None
+
+    # ----------------------------------------------------------------- the clock
+    @property
+    def physics_rate(self) -> float:
+        """Steps per second of simulated time, Hz."""
+        return self._rate
+
+    @property
+    def dt(self) -> float:
+        """Step, s."""
+        return 1.0 / self._rate
+
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self._origin + self._steps * self.dt
+
+    def set_physics_rate(self, rate: float) -> None:
+        """A new rate from now on (the clock keeps its time)."""
+        rate = finite_number('physics_rate', rate, positive=True)
+        self._origin, self._steps, self._rate = self.time, 0, rate
+
+    def reset_time(self) -> None:
+        """Simulated time back to 0 (every rod's commands start afresh)."""
+        self._origin, self._steps = 0.0, 0
+        for engine in self.engines.values():
+            engine._time_reset()
+
+    def steps_until(self, t: float) -> int:
+        """Number of whole steps from :attr:`time` to reach time ``t`` (s), >= 0."""
+        n = (finite_number('t', t) - self.time) / self.dt + 1e-9
+        if not math.isfinite(n):
+            raise ValueError(f't = {t!r} s is too many steps of {self.dt:g} s away')
+        return max(0, math.floor(n))
+
+    # ----------------------------------------------------------------- the rods
+    def add(self, name: str, engine: Rod) -> None:
+        """Add ``engine`` as ``name`` (its physics_rate must be the world's)."""
+        if name in self.engines:
+            raise ValueError(f'a rod named {name!r} is already in the world')
+        if engine.config.physics_rate != self._rate:
+            raise ValueError(f'{name}: physics_rate {engine.config.physics_rate:g} Hz is not '
+                             f"the world's {self._rate:g} Hz")
+        self.engines[name] = engine
+        self.changed()
+
+    def remove(self, name: str) -> Any:
+        """Take the rod ``name`` out of the world; return it."""
+        engine = self.engines.pop(name)
+        self.changed()
+        return engine
+
+    def changed(self) -> None:
+        """A rod was added or removed, or changed its drive, rod or limits: regroup."""
+        self._groups = None
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self.engines.values())
+
+    def __len__(self) -> int:
+        return len(self.engines)
+
+    @property
+    def halted(self) -> str | None:
+        """Every rod's halt when all have halted (a world of none never halts), else None."""
+        if not self.engines or any(not e.halted for e in self.engines.values()):
+            return None
+        return '; '.join(f'{name}: {e.halted}' for name, e in self.engines.items())
+
+    def _grouped(self) -> list[_Group]:
+        """The running rods by drive and coupling (rebuilt after :meth:`changed`)."""
+        if self._groups is None:
+            by_kind: dict[tuple, list] = {}
+            for engine in self.engines.values():
+                if engine.halted:
+                    continue
+                key = (engine.config.drive, engine.config.coupling)
+                by_kind.setdefault(key, []).append(engine)
+            self._groups = [_Group(drive, coupling, engines)
+                            for (drive, coupling), engines in by_kind.items()]
+        return self._groups
+
+    # ----------------------------------------------------------------- stepping
+    def advance(self, steps: int) -> int:
+        """Take up to ``steps`` steps of every rod still running; return how many.
+
+        Fewer only when every rod has halted (a halted rod stays at its last good state
+        while the others go on).
+        """
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)):
+            raise ValueError(f'steps must be a whole number, got {steps!r}')
+        done = 0
+        while done < steps:
+            running = [e for e in self.engines.values() if not e.halted]
+            if not running:
+                break
+            done += self._block(running, min(steps - done, BLOCK_STEPS))
+        return done
+
+    def advance_to(self, t: float) -> int:
+        """Take the whole steps that do not pass time ``t`` (s); return how many."""
+        return self.advance(self.steps_until(t))
+
+    def _block(self, running: list, steps: int) -> int:
+        """One block of at most ``steps`` steps of the running rods; how many taken."""
+        t0, dt = self.time, self.dt
+        for engine in running:
+            steps = min(steps, engine._block_limit(t0, steps))
+        inputs = {id(e): e._block_inputs(t0, steps) for e in running}
+        times = t0 + dt * np.arange(1, steps + 1)
+        records = {}
+        for group in self._grouped():
+            for engine, record in zip(group.engines, group.run(
+                    [inputs[id(e)] for e in group.engines], times, dt)):
+                records[id(engine)] = record
+        # the clock goes on while a rod does; when all halt, to the last one's halt
+        if all(r.rejected is not None for r in records.values()):
+            steps = max(r.taken for r in records.values())
+        self._steps += steps
+        for engine in running:
+            engine._block_done(t0, records[id(engine)])
+        return steps
+
+
+__all__ = ['BLOCK_STEPS', 'BlockRecord', 'NON_FINITE', 'TOO_FAR', 'TOO_FAST', 'World']

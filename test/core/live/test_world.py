@@ -1,0 +1,154 @@
+"""A world of rods: one batch, each rod as if alone, a halt disturbs nobody.
+
+The reference for a rod in a world is the same rod in a world of its own (Python floats
+through the same kernel): IEEE arithmetic on numpy arrays is the same arithmetic, so
+the states agree bit for bit. The physics itself is held to closed forms and
+invariants by test_engine.py and test_stepper.py.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from rotrod_core import RodParams
+from rotrod_core.command.trajectory import TrajectoryPoint
+from rotrod_core.live.engine import EngineConfig, SimulationEngine
+from rotrod_core.live.execution import TrajectoryGoal
+from rotrod_core.live.world import World
+
+RODS = {
+    'table1': EngineConfig(),
+    'heavy': EngineConfig(params=RodParams(mass=0.4, rod_density=7850.0, gravity=9.81)),
+    'damped': EngineConfig(params=RodParams(damping_ratio=0.02, eccentricity=0.05)),
+    'rect': EngineConfig(params=RodParams(section='rectangular', section_width=0.003,
+                                          section_thickness=0.0035)),
+    'torque': EngineConfig(drive='torque', initial={'omega': 1.0, 'u': 1e-3}),
+    'paper': EngineConfig(drive='torque', coupling='paper', initial={'omega': 0.5}),
+    'timeout': EngineConfig(command_timeout=0.5),
+}
+
+
+def command(name, engine, k):
+    """The commands of rod ``name`` at the k-th 10 ms of simulated time."""
+    t = engine.time
+    if name == 'torque':
+        engine.command_torque(0.02 * math.sin(0.3 * k), at=t)
+    elif name == 'paper':
+        engine.command_torque(0.01, at=t)
+    elif name == 'timeout':
+        if k < 50:
+            engine.command_omega(1.0, at=t)
+    elif name == 'heavy' and k == 30:
+        engine.command_trajectory(TrajectoryGoal((TrajectoryPoint(2.5, velocity=0.8,
+                                                                  acceleration=0.0),)))
+    elif k % 7 == 0 and name != 'heavy':
+        engine.command_omega(0.8 + 0.1 * math.sin(k), at=t)
+
+
+def run_alone(name, config, periods):
+    engine = SimulationEngine(config)
+    states = []
+    for k in range(periods):
+        command(name, engine, k)
+        engine.advance(10)
+        states.append(engine.state)
+    return states
+
+
+def run_together(periods):
+    world = World(1000.0)
+    engines = {name: SimulationEngine(config, world=world, name=name)
+               for name, config in RODS.items()}
+    states: dict = {name: [] for name in RODS}
+    for k in range(periods):
+        for name, engine in engines.items():
+            command(name, engine, k)
+        assert world.advance(10) == 10
+        for name, engine in engines.items():
+            states[name].append(engine.state)
+    return world, engines, states
+
+
+def test_each_rod_in_a_world_moves_as_if_alone_bit_for_bit():
+    _, engines, together = run_together(300)
+    for name, config in RODS.items():
+        assert together[name] == run_alone(name, config, 300), name
+    assert engines['timeout'].timed_out_at is not None          # its timeout ran out
+    assert engines['heavy'].trajectory_outcomes[-1].code == 'SUCCESSFUL'
+
+
+def test_a_world_replays_bit_for_bit():
+    assert run_together(120)[2] == run_together(120)[2]
+
+
+def test_a_rod_that_halts_disturbs_nobody():
+    world = World(1000.0)
+    calm = SimulationEngine(EngineConfig(), world=world, name='calm')
+    wild = SimulationEngine(EngineConfig(params=RodParams(eccentricity=10.0),
+                                         max_angular_acceleration=0.4), world=world,
+                            name='wild')          # 1 rad/s: 69 mm, past 0.1 l
+    calm.command_omega(1.0)
+    wild.command_omega(1.0)
+    assert world.advance(6000) == 6000
+    assert wild.halted and 'validity bound' in wild.halted and calm.halted is None
+    alone = SimulationEngine(EngineConfig())
+    alone.command_omega(1.0)
+    alone.advance(6000)
+    assert calm.state == alone.state and calm.time == alone.time
+    frozen = wild.state
+    world.advance(100)
+    assert wild.state == frozen                                # at its last good state
+    assert math.hypot(frozen.u, frozen.v) <= wild.config.max_deflection
+    wild.reset()                                               # back in the batch
+    wild.command_omega(0.5)
+    world.advance(10)
+    assert wild.halted is None and wild.state.omega > 0.0
+
+
+def test_when_every_rod_halts_the_clock_stops_at_the_last_halt():
+    world = World(1000.0)
+    rod = SimulationEngine(EngineConfig(params=RodParams(eccentricity=10.0),
+                                        max_angular_acceleration=0.4), world=world)
+    rod.command_omega(1.0)
+    taken = world.advance(10_000)
+    assert 0 < taken < 10_000 and world.halted
+    assert world.time == pytest.approx(taken * world.dt)
+    assert world.advance(10) == 0
+
+
+def test_rods_come_and_go_between_steps_and_need_the_world_s_rate():
+    world = World(1000.0)
+    a = SimulationEngine(EngineConfig(), world=world, name='a')
+    a.command_omega(1.0)
+    world.advance(500)
+    b = SimulationEngine(EngineConfig(initial={'omega': 0.5}), world=world, name='b')
+    world.advance(500)
+    assert b.state.omega == 0.5 and a.state.omega > 0
+    assert world.remove('a') is a
+    world.advance(10)
+    assert list(world.engines) == ['b']
+    with pytest.raises(ValueError, match='already in the world'):
+        SimulationEngine(EngineConfig(), world=world, name='b')
+    with pytest.raises(ValueError, match="is not the world's 1000 Hz"):
+        SimulationEngine(EngineConfig(physics_rate=2000.0), world=world, name='c')
+    with pytest.raises(RuntimeError, match='step the world'):
+        SimulationEngine(EngineConfig(), world=world, name='d').step()
+
+
+def test_a_many_rod_step_is_one_pass_not_a_loop_per_rod(monkeypatch):
+    """100 rods take as many calls of the equations per step as one rod: 4 (RK4)."""
+    import rotrod_core.live.world as world_module
+    calls = []
+    original = world_module.model.deflection_accelerations
+
+    def counted(co, *args):
+        calls.append(np.shape(args[0]))
+        return original(co, *args)
+    monkeypatch.setattr(world_module.model, 'deflection_accelerations', counted)
+    world = World(1000.0)
+    for i in range(100):
+        SimulationEngine(EngineConfig(), world=world, name=f'rod{i}').command_omega(1.0)
+    assert world.advance(50) == 50
+    assert len(calls) == 4 * 50 and set(calls) == {(100,)}
+    assert np.isfinite([e.state.u for e in world]).all()
