@@ -14,11 +14,12 @@ off (``ROTROD_PLAN_CACHE=off``), the first plan of that process, timed from the 
 ``plan_spin_up`` to its return: the imports (about a second, stated in the note) are
 not counted. The median of ``--repeat`` such processes (3) is the row's value, with
 targets for the three requests the issue sets them for (nominal <= 1 s, robust 0.1 <=
-2 s, config/planned.yaml's <= 3 s). The processes must agree on the duration to the
-last digit. Then, of the plan: duration, peak deflection and residual (the planner's
-predictions, then re-measured by ``simulate`` with the plan's end on the time grid),
-largest |w'|. Eq. 26 (15 s spin-up) gives the residual to compare with. ``measure()``
-returns the rows (bench/results.py).
+2 s, config/planned.yaml's <= 3 s); the header gives the load average when the run
+began (the targets are for an idle machine). The processes must agree on the
+duration to the last digit. Then, of the plan: duration, peak deflection and residual
+(the planner's predictions, then re-measured by ``simulate`` with the plan's end on
+the time grid), largest |w'|. Eq. 26 (15 s spin-up) gives the residual to compare
+with. ``measure()`` returns the rows (bench/results.py).
 """
 
 import argparse
@@ -194,8 +195,10 @@ def main():
     ap.add_argument('--repeat', type=int, default=REPEAT,
                     help='cold processes per request (the median time is reported)')
     args = ap.parse_args()
+    load = os.getloadavg()      # the planning times move with other work on the machine
     rows = measure(args.repeat)
-    return results.report(rows, args.json, title='rotrod planner benchmark', stamp=results.host())
+    return results.report(rows, args.json, title='rotrod planner benchmark',
+                          stamp=results.host(load))
 
 
 if __name__ == '__main__':
