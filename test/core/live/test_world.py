@@ -1,9 +1,12 @@
 """A world of rods: one batch, each rod as if alone, a halt disturbs nobody.
 
 The reference for a rod in a world is the same rod in a world of its own (Python floats
-through the same kernel): IEEE arithmetic on numpy arrays is the same arithmetic, so
-the states agree bit for bit. The physics itself is held to closed forms and
-invariants by test_engine.py and test_stepper.py.
+through the kernel, step by step). Rods of a torque drive are stepped by the same
+kernel on arrays: the same IEEE arithmetic, so their states agree bit for bit. Rods of
+a velocity drive take the kernel's step written as its affine map (the kernel gives the
+map): hub angle and speed agree bit for bit, the deflection state to rounding. The
+physics itself is held to closed forms and invariants by test_engine.py and
+test_stepper.py, and through the simulator by test/acceptance/test_world.py.
 """
 
 import math
@@ -70,10 +73,21 @@ def run_together(periods):
     return world, engines, states
 
 
-def test_each_rod_in_a_world_moves_as_if_alone_bit_for_bit():
+def same_motion(together, alone, name):
+    """States as if alone: theta, w (and a torque drive's everything) bit for bit; a
+    velocity drive's u, v, u', v' to rounding: 1e-12 of their largest magnitude."""
+    a, b = np.array(together), np.array(alone)
+    assert np.array_equal(a[:, 4:], b[:, 4:]), name
+    if RODS.get(name, EngineConfig()).drive == 'torque':
+        assert np.array_equal(a, b), name
+    scale = np.max(np.abs(b[:, :4]), axis=0)
+    assert np.all(np.abs(a[:, :4] - b[:, :4]) <= 1e-12 * scale), name
+
+
+def test_each_rod_in_a_world_moves_as_if_alone_to_rounding():
     _, engines, together = run_together(300)
     for name, config in RODS.items():
-        assert together[name] == run_alone(name, config, 300), name
+        same_motion(together[name], run_alone(name, config, 300), name)
     assert engines['timeout'].timed_out_at is not None          # its timeout ran out
     assert engines['heavy'].trajectory_outcomes[-1].code == 'SUCCESSFUL'
 
@@ -95,7 +109,8 @@ def test_a_rod_that_halts_disturbs_nobody():
     alone = SimulationEngine(EngineConfig())
     alone.command_omega(1.0)
     alone.advance(6000)
-    assert calm.state == alone.state and calm.time == alone.time
+    same_motion([calm.state], [alone.state], 'calm')
+    assert calm.time == alone.time
     frozen = wild.state
     world.advance(100)
     assert wild.state == frozen                                # at its last good state
@@ -136,19 +151,51 @@ def test_rods_come_and_go_between_steps_and_need_the_world_s_rate():
         SimulationEngine(EngineConfig(), world=world, name='d').step()
 
 
-def test_a_many_rod_step_is_one_pass_not_a_loop_per_rod(monkeypatch):
-    """100 rods take as many calls of the equations per step as one rod: 4 (RK4)."""
+def count_kernel_calls(monkeypatch) -> list:
+    """The shape of every call of the equations from now on (its arguments broadcast)."""
     import rotrod_core.live.world as world_module
     calls = []
     original = world_module.model.deflection_accelerations
 
     def counted(co, *args):
-        calls.append(np.shape(args[0]))
+        calls.append(np.broadcast(*args).shape)
         return original(co, *args)
     monkeypatch.setattr(world_module.model, 'deflection_accelerations', counted)
+    return calls
+
+
+def test_a_many_rod_block_is_one_pass_of_the_kernel_not_a_loop_per_rod(monkeypatch):
+    """100 rods of a velocity drive: a block of 50 steps is 4 calls of the equations
+    (RK4's stages) over every step and rod at once; of a torque drive, 4 per step over
+    every rod."""
+    calls = count_kernel_calls(monkeypatch)
     world = World(1000.0)
     for i in range(100):
         SimulationEngine(EngineConfig(), world=world, name=f'rod{i}').command_omega(1.0)
     assert world.advance(50) == 50
-    assert len(calls) == 4 * 50 and set(calls) == {(100,)}
+    assert len(calls) == 4 and set(calls) == {(5, 50, 100)}     # x = 0 and 4 unit states
     assert np.isfinite([e.state.u for e in world]).all()
+    calls.clear()
+    world = World(1000.0)
+    for i in range(100):
+        SimulationEngine(EngineConfig(drive='torque'), world=world,
+                         name=f'rod{i}').command_torque(0.01)
+    assert world.advance(50) == 50
+    assert len(calls) == 4 * 50 and set(calls) == {(100,)}
+
+
+def test_a_hold_reuses_its_maps_and_moves_as_the_steps_taken_one_by_one(monkeypatch):
+    """At a constant w the maps are computed once; the motion is still the kernel's."""
+    calls = count_kernel_calls(monkeypatch)
+    world = World(1000.0)
+    rods = [SimulationEngine(EngineConfig(initial={'omega': 1.5, 'u': 1e-4}), world=world,
+                             name=f'rod{i}') for i in range(3)]
+    for rod in rods:
+        rod.command_omega(1.5)
+    for _ in range(20):
+        world.advance(10)
+    assert len(calls) == 4                                     # one block's maps
+    alone = SimulationEngine(EngineConfig(initial={'omega': 1.5, 'u': 1e-4}))
+    alone.command_omega(1.5)
+    alone.advance(200)
+    same_motion([rods[2].state], [alone.state], 'hold')
