@@ -88,6 +88,9 @@ INTERFACES = (
 """Every rod's interfaces, relative to its prefix (none for the simulator's first rod)."""
 SAMPLE_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
                  'frequencies/estimate')
+LOOK = 0.1
+"""Wall seconds between looks at who subscribes to a rod's sample topics (a topic
+nobody subscribes to is not published; as fast as possible, a look per sample)."""
 
 
 HUB_SHAPES = (0, 1)
@@ -206,22 +209,34 @@ class RodIO:
         """Publish the rod's sample (the physics thread)."""
         st, stamp, obs = s.state, messages.stamp(s.stamp), self.observation
         wait = not settings.real_time_factor       # as fast as possible: lossless
-        send, m = self.keep_all.send, self.messages
+        keep_all = self.keep_all
+        # who listens: at every sample as fast as possible (lossless), else every LOOK s
+        keep_all.look(SAMPLE_TOPICS + ('markers',), 0.0 if wait else LOOK)
+        send, subscribed, m = keep_all.send, keep_all.subscribed, self.messages
+        # the sensor reads the tip whether or not anyone listens (its noise sequence
+        # and the estimate do not depend on the subscribers)
         u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
-        send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque), wait)
-        send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
-        position = s.position if self.pose is ORIGIN else self.pose.place(s.position)
-        send('tip/position', messages.set_position(m.position, stamp, position), wait)
-        send('frequencies', messages.set_frequencies(m.frequencies, stamp, float(st.omega),
-                                                     *s.frequencies), wait)
+        if subscribed('joint_states'):
+            send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque),
+                 wait)
+        if subscribed('tip/deflection'):
+            send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
+        if subscribed('tip/position'):
+            position = s.position if self.pose is ORIGIN else self.pose.place(s.position)
+            send('tip/position', messages.set_position(m.position, stamp, position), wait)
+        if subscribed('frequencies'):
+            send('frequencies', messages.set_frequencies(m.frequencies, stamp,
+                                                         float(st.omega), *s.frequencies),
+                 wait)
         self.trajectories.feedback(stamp, s.tracking)
         if estimator is not None:
             estimate = estimator.push(s.time, u, v)
-            if estimate is not None:       # stamped at its window's middle
+            if estimate is not None and subscribed('frequencies/estimate'):
+                # stamped at its window's middle
                 middle = messages.stamp(s.stamp - (s.time - estimate.time))
                 send('frequencies/estimate',
                      messages.set_whirl_estimate(m.estimate, middle, estimate), wait)
-        if s.markers:
+        if s.markers and subscribed('markers'):
             self._publish_markers(s, stamp, settings, config)
 
     def _publish_markers(self, s: Sample, stamp, settings: NodeSettings,
