@@ -265,6 +265,9 @@ class RealTimeLoop(Generic[SettingsT]):
         self.paused = settings.start_paused
         self._step_requests: deque[StepRequest] = deque()
         self._interrupts = 0
+        self._serving = False
+        """Whether a step request is being served (parameter changes wait for its end)."""
+        self._deferred: list = []
         """Resets and plays so far: a step request being served ends at the next one."""
         self.steps_taken = 0
         """Physics steps taken on request (:meth:`request_steps`) so far."""
@@ -542,16 +545,23 @@ class RealTimeLoop(Generic[SettingsT]):
         """
         configs = config if isinstance(config, dict) else {self.engine.name: config}
         with self.lock:
-            self._apply_commands()
-            for name, cfg in configs.items():
-                engine = self.world.engines[name]
-                if cfg != engine.config:
-                    engine.reconfigure(cfg)
-            old, self.settings = self.settings, settings
-            if settings.real_time_factor != old.real_time_factor:
-                self._restart_clock()
-            self._countdown = min(self._countdown, self._publish_steps)
-            self._report_outcomes()
+            if self._serving:               # between requests: at the end of this one
+                self._deferred.append((configs, settings))
+                return
+            self._reconfigure(configs, settings)
+
+    def _reconfigure(self, configs: dict, settings: SettingsT) -> None:
+        """:meth:`reconfigure`, the lock held."""
+        self._apply_commands()
+        for name, cfg in configs.items():
+            engine = self.world.engines.get(name)   # (deleted while the change waited)
+            if engine is not None and cfg != engine.config:
+                engine.reconfigure(cfg)
+        old, self.settings = self.settings, settings
+        if settings.real_time_factor != old.real_time_factor:
+            self._restart_clock()
+        self._countdown = min(self._countdown, self._publish_steps)
+        self._report_outcomes()
 
     def reset(self, state: bool = True, time: bool = False) -> tuple:
         """Back to the initial ``state`` (clears a halt) and/or simulated ``time`` 0.
@@ -604,8 +614,7 @@ class RealTimeLoop(Generic[SettingsT]):
         (:meth:`submit`) is applied, in arrival order, at the current simulated time,
         i.e. before the first step; commands arriving during a request wait for the
         next one. A parameter change (:meth:`reconfigure`) takes effect when made,
-        between requests (one made during a request waits for its end: the request
-        holds the lock). Then the steps are taken; each publication that falls due (every
+        between requests (one made during a request at its end). Then the steps are taken; each publication that falls due (every
         physics_rate/publish_rate steps, counted from simulated time 0 or the last
         reset of time, and the state at that instant if not yet published) is
         published at once. Nothing depends on the wall clock, so the same requests
@@ -626,13 +635,14 @@ class RealTimeLoop(Generic[SettingsT]):
         """Take a request's steps and publish what falls due (the loop's thread).
 
         Under the lock from one publication instant to the next, not longer: between
-        them a service or a parameter change takes its turn. A reset, a play or a stop
+        them a service takes its turn (a parameter change waits for the end). A reset, a play or a stop
         (:attr:`_interrupts`) and a cancel end the request at the next publication
         instant, so no request, however many steps it asks, takes the world away
         from its users.
         """
         completed, problem = 0, None
         with self.lock:
+            self._serving = True
             interrupts = self._interrupts
             if not self.paused:
                 problem = STEPS_NOT_PAUSED
@@ -664,6 +674,11 @@ class RealTimeLoop(Generic[SettingsT]):
                     if done < n:
                         problem = f'{STEPS_HALTED}: {self.world.halted}'
                 self._log_timeout()
+        with self.lock:
+            self._serving = False
+            for configs, settings in self._deferred:
+                self._reconfigure(configs, settings)
+            self._deferred.clear()
         self.report()
         request.finish(completed, problem)
 

@@ -170,3 +170,23 @@ def test_a_reset_of_time_alone_keeps_the_state_and_restarts_the_grid():
     run.samples.clear()
     run.step(10)
     assert [s.time for s in run.samples] == [0.0, 10 / PHYSICS_RATE]
+
+
+def test_a_parameter_change_during_a_request_takes_effect_at_its_end():
+    """Between requests, as before the world released its lock at each publication:
+    the request's samples are all at the old publish rate, the next one's at the new."""
+    run = Stepped()
+    changed = []
+
+    def change(done, left):
+        if not changed:         # from another thread in the node: mid-request here
+            run.loop.reconfigure(run.engine.config, LoopSettings(
+                realtime_priority=0, publish_rate=PUBLISH_RATE / 2, start_paused=True))
+            changed.append(run.loop.settings.publish_rate)
+    run.step(40, progress=change)
+    assert changed == [PUBLISH_RATE]                     # not yet, within the request
+    assert run.loop.settings.publish_rate == PUBLISH_RATE / 2    # at its end
+    assert [round(s.time * PHYSICS_RATE) for s in run.samples] == [0, 10, 20, 30, 40]
+    run.step(40)
+    # the grid goes on from the change: the next instant as it was, then every 20 steps
+    assert [round(s.time * PHYSICS_RATE) for s in run.samples][5:] == [50, 70]
