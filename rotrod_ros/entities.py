@@ -63,6 +63,8 @@ NAMESPACE = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*/?')
 """A ROS namespace (relative or absolute)."""
 PARTS = ('hub', 'tip')
 """The entities of a rod besides itself."""
+REQUEST_QUEUE = 1000
+"""Requests the spawn and delete services queue (rclpy's default, 10, drops a burst)."""
 QUATERNION_TOLERANCE = 1e-6
 """How far from 1 a pose's quaternion's norm may be."""
 
@@ -74,13 +76,15 @@ INTERFACES = (
         'namespace; default its name), initial_pose (frame world; a rotation about z '
         'only). Codes NAME_NOT_UNIQUE, NAME_INVALID, NAMESPACE_INVALID, NO_RESOURCE, '
         'UNSUPPORTED_FORMAT, RESOURCE_PARSE_ERROR (naming the field), INVALID_POSE; more '
-        'than max_rods: RESULT_OPERATION_FAILED'),
+        'than max_rods: RESULT_OPERATION_FAILED. Its queue holds 1000 requests',
+        depth=REQUEST_QUEUE),
     srv('~/spawn_entities', SpawnEntities,
         'simulation_interfaces: several spawn requests, each answered as spawn_entity '
-        '(ENTITIES_SPAWN_FAILED when one fails; the others are spawned)'),
+        '(ENTITIES_SPAWN_FAILED when one fails; the others are spawned)',
+        depth=REQUEST_QUEUE),
     srv('~/delete_entity', DeleteEntity,
         'simulation_interfaces: a rod by name (its goals end, its interfaces go; the '
-        'world steps on); unknown: RESULT_NOT_FOUND'),
+        'world steps on); unknown: RESULT_NOT_FOUND', depth=REQUEST_QUEUE),
     srv('~/get_entities', GetEntities,
         'simulation_interfaces: the rods and their hub and tip entities, filtered by a '
         'regular expression (re.search) and categories (rods ROBOT, hub and tip OBJECT); '

@@ -69,9 +69,9 @@ def sub(name: str, msg_type: type, description: str, depth: int = 10,
                      transient_local)
 
 
-def srv(name: str, srv_type: type, description: str) -> Interface:
-    """A service the node offers."""
-    return Interface(SERVICE, name, srv_type, description)
+def srv(name: str, srv_type: type, description: str, depth: int = 10) -> Interface:
+    """A service the node offers (``depth``: the requests its queue holds)."""
+    return Interface(SERVICE, name, srv_type, description, depth)
 
 
 def action(name: str, action_type: type, description: str) -> Interface:
@@ -106,6 +106,14 @@ def qos(interface: Interface, conditions=()):
     return interface.depth
 
 
+def _service_qos(depth: int):
+    """rclpy's services QoS (reliable, volatile) with a queue of ``depth`` requests."""
+    from rclpy.qos import QoSProfile, qos_profile_services_default
+    return QoSProfile(history=qos_profile_services_default.history, depth=depth,
+                      reliability=qos_profile_services_default.reliability,
+                      durability=qos_profile_services_default.durability)
+
+
 def create(node, interfaces, callbacks: dict | None = None, conditions=(),
            callback_groups: dict | None = None, names: dict | None = None) -> dict:
     """Create ``interfaces`` on ``node`` (rclpy); return them by name.
@@ -128,6 +136,7 @@ def create(node, interfaces, callbacks: dict | None = None, conditions=(),
                                                     qos(i, conditions))
         elif i.kind == SERVICE:
             made[i.name] = node.create_service(i.type, i.name, callbacks[i.name],
+                                               qos_profile=_service_qos(i.depth),
                                                callback_group=groups.get(i.name))
         elif i.kind == CLIENT:
             made[i.name] = node.create_client(i.type, i.name.format(**fill))

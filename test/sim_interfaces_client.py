@@ -9,9 +9,14 @@ with what it saw; the test judges it.
 The scenario: the features; pause; a full reset (time 0); the command 2 rad/s on
 cmd/omega; 2000 steps by StepSimulation, 1000 by SimulateSteps (feedback kept); the
 tip's state after each; bad requests (each answered with its code, nothing changed);
-a cancelled SimulateSteps; a full reset and the same again; play.
+a cancelled SimulateSteps; a full reset and the same again; play. With ``--world FILE``
+(JSON: rods, each a name, a URDF file, a speed and an x), then a world: pause; spawn the
+rods by SpawnEntities from their URDF files (uri), each at its x; command each its
+speed on <name>/cmd/omega; step; every tip's state by GetEntitiesStates; a SimulateSteps
+goal during which the first rod is deleted (then cancelled); delete the rest.
 
 Usage: python sim_interfaces_client.py [--simulator /rotrod_simulator] [--omega 2.0]
+       [--world FILE]
 """
 
 import argparse
@@ -26,13 +31,18 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from simulation_interfaces.action import SimulateSteps
-from simulation_interfaces.msg import Result, SimulationState
+from simulation_interfaces.msg import EntityFilters, Resource, Result, SimulationState
+from simulation_interfaces.msg import SpawnEntity as SpawnRequest
 from simulation_interfaces.srv import (
+    DeleteEntity,
+    GetEntities,
+    GetEntitiesStates,
     GetEntityState,
     GetSimulationState,
     GetSimulatorFeatures,
     ResetSimulation,
     SetSimulationState,
+    SpawnEntities,
     StepSimulation,
 )
 from std_msgs.msg import Float64
@@ -62,6 +72,10 @@ class Client:
             'step': n.create_client(StepSimulation, f'{s}/step_simulation'),
             'reset': n.create_client(ResetSimulation, f'{s}/reset_simulation'),
             'entity': n.create_client(GetEntityState, f'{s}/get_entity_state'),
+            'spawn': n.create_client(SpawnEntities, f'{s}/spawn_entities'),
+            'delete': n.create_client(DeleteEntity, f'{s}/delete_entity'),
+            'entities': n.create_client(GetEntities, f'{s}/get_entities'),
+            'states': n.create_client(GetEntitiesStates, f'{s}/get_entities_states'),
         }
         self.action = ActionClient(n, SimulateSteps, f'{s}/simulate_steps')
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -180,10 +194,85 @@ def bad_requests(client: Client) -> dict:
     return {'codes': codes, 'unchanged': tip(client) == before, 'action_0': action_0}
 
 
+def world(client: Client, rods: list) -> dict:
+    """Spawn ``rods`` (name, urdf file, omega, x), command, step, read, delete."""
+    out: dict = {'pause': set_state(client, SimulationState.STATE_PAUSED)}
+    requests = []
+    for rod in rods:
+        request = SpawnRequest(name=rod['name'], entity_resource=Resource(uri=rod['urdf']))
+        request.initial_pose.header.frame_id = 'world'
+        request.initial_pose.pose.position.x = rod['x']
+        request.initial_pose.pose.orientation.w = 1.0
+        requests.append(request)
+    reply = client.call('spawn', SpawnEntities.Request(spawn_requests=requests))
+    out['spawn'] = reply.result.result
+    out['spawned'] = [r.entity_name for r in reply.results]
+    reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    publishers = {}
+    for rod in rods:
+        pub = client.node.create_publisher(Float64, f"{rod['name']}/cmd/omega", reliable)
+        client.wait_for(lambda p=pub: p.get_subscription_count() > 0,
+                        f"{rod['name']}/cmd/omega matched")
+        publishers[rod['name']] = pub
+    # a command reaches the simulator once its subscription has matched this publisher
+    # too (discovery goes both ways): send until every hub has started to move
+    waiting = dict(publishers)
+    for _ in range(100):
+        for name, pub in waiting.items():
+            pub.publish(Float64(data=next(r['omega'] for r in rods if r['name'] == name)))
+        client.executor.spin_once(timeout_sec=0.1)
+        client.call('step', StepSimulation.Request(steps=1))
+        hubs = dict(zip(*_states(client, '/hub$')))
+        waiting = {name: pub for name, pub in waiting.items()
+                   if hubs[f'{name}/hub'].twist.angular.z == 0.0}
+        if not waiting:
+            break
+    out['step'] = client.call('step', StepSimulation.Request(
+        steps=rods[0]['steps'])).result.result
+    states = client.call('states', GetEntitiesStates.Request(
+        filters=EntityFilters(filter='/tip$')))
+    out['tips'] = {name: [st.pose.position.x, st.pose.position.y, st.pose.position.z]
+                   for name, st in zip(states.entities, states.states)}
+    out['hubs'] = {name: st.twist.angular.z for name, st in zip(
+        *_states(client, '/hub$'))}
+    # the first rod deleted while a SimulateSteps goal runs: answered, the goal goes on
+    first = rods[0]['name']
+    client.wait_for(lambda: client.action.server_is_ready(), 'simulate_steps server')
+    feedback: list = []
+    sent = client.action.send_goal_async(
+        SimulateSteps.Goal(steps=10**9),
+        feedback_callback=lambda m: feedback.append(m.feedback.completed_steps))
+    client.wait_for(sent.done, 'goal response')
+    handle = sent.result()
+    client.wait_for(lambda: len(feedback) >= 2, 'feedback before the delete')
+    out['delete_during_goal'] = client.call('delete', DeleteEntity.Request(
+        entity=first)).result.result
+    before = len(feedback)
+    client.wait_for(lambda: len(feedback) >= before + 3, 'feedback after the delete')
+    cancelled = handle.cancel_goal_async()
+    client.wait_for(cancelled.done, 'cancel response')
+    result = handle.get_result_async()
+    client.wait_for(result.done, 'action result')
+    out['goal_status'] = result.result().status
+    out['steps_after_delete'] = feedback[-1] - feedback[before - 1]
+    out['delete_rest'] = [client.call('delete', DeleteEntity.Request(
+        entity=rod['name'])).result.result for rod in rods[1:]]
+    out['delete_again'] = client.call('delete', DeleteEntity.Request(
+        entity=first)).result.result
+    out['left'] = list(client.call('entities', GetEntities.Request()).entities)
+    return out
+
+
+def _states(client: Client, pattern: str) -> tuple:
+    r = client.call('states', GetEntitiesStates.Request(filters=EntityFilters(filter=pattern)))
+    return list(r.entities), list(r.states)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     ap.add_argument('--simulator', default='/rotrod_simulator')
     ap.add_argument('--omega', type=float, default=2.0)
+    ap.add_argument('--world', help='JSON file of rods to spawn, command, read and delete')
     args = ap.parse_args()
     rclpy.init()
     client = Client(args.simulator)
@@ -207,6 +296,9 @@ def main() -> int:
         report['state_after_play'] = state_code(client)
         client.wait_for(lambda: any(t > paused_at for t in client.clock), '/clock after play')
         report['clock_after_play_ns'] = max(client.clock)
+        if args.world:
+            with open(args.world) as f:
+                report['world'] = world(client, json.load(f))
         report['ok'] = Result.RESULT_OK
     finally:
         print('@@REPORT@@' + json.dumps(report), flush=True)

@@ -13,10 +13,11 @@ import subprocess
 
 import numpy as np
 import pytest
+from rclpy.qos import QoSProfile
 from geometry_msgs.msg import PointStamped, PoseStamped, Vector3Stamped
 from node_probes import namespace, start_simulator
 from sensor_msgs.msg import JointState
-from simulation_interfaces.msg import EntityFilters, Resource, Result
+from simulation_interfaces.msg import EntityFilters, Resource, Result, SimulationState
 from simulation_interfaces.msg import SpawnEntity as SpawnRequest
 from simulation_interfaces.srv import (
     DeleteEntity,
@@ -25,6 +26,8 @@ from simulation_interfaces.srv import (
     GetEntityState,
     GetSimulatorFeatures,
     ResetSimulation,
+    SetEntityState,
+    SetSimulationState,
     SpawnEntities,
     SpawnEntity,
 )
@@ -260,3 +263,82 @@ def test_spawn_pose_places_the_rod_in_the_shared_world_frame(ros_processes, ros_
                                 GetEntityState.Request(entity='far/tip')).state
     assert (tip.pose.position.x, tip.pose.position.y, tip.pose.position.z) == pytest.approx(
         (2.0 + R0 * math.cos(yaw), -1.0 + R0 * math.sin(yaw), L), abs=1e-12)
+
+
+def test_a_thousand_spawns_are_each_answered_and_the_world_keeps_its_rate(
+        ros_processes, ros_node, request):
+    """1000 SpawnEntity requests at once against max_rods 20: 19 spawned, 981 refused
+    with the bound in a sentence; meanwhile the first rod publishes every 10 ms of its
+    simulated time (real time), none missing."""
+    ns = namespace(request)
+    start_simulator(ros_processes, ns, 'table1.yaml', markers=False, estimate_window=0.0,
+                    max_rods=20)
+    sim = f'{ns}/rotrod_simulator'
+    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+    text = urdf()
+    spawn(ros_node, sim, 'warm', text)                 # the client discovered, warmed up
+    # the requests all at once: the client's queue holds their answers
+    client = ros_node.node.create_client(SpawnEntity, f'{sim}/spawn_entity',
+                                         qos_profile=QoSProfile(depth=1000))
+    ros_node.spin_until(client.service_is_ready, 10, 'spawn_entity')
+    ros_node.spin_until(lambda: len(joint) > 10, 10, 'joint_states')
+    first = len(joint)
+    futures = []
+    for i in range(1000):
+        req = SpawnEntity.Request(name=f'r{i}',
+                                  entity_resource=Resource(resource_string=text))
+        req.initial_pose.pose.orientation.w = 1.0
+        futures.append(client.call_async(req))
+    ros_node.spin_until(lambda: all(f.done() for f in futures), 120, '1000 answers')
+    codes = [f.result().result.result for f in futures]
+    assert codes.count(Result.RESULT_OK) == 18                 # 20 with the first and warm
+    refused = [f.result().result for f in futures
+               if f.result().result.result != Result.RESULT_OK]
+    assert len(refused) == 982 and all(
+        r.result == Result.RESULT_OPERATION_FAILED and 'max_rods 20' in r.error_message
+        for r in refused)
+    ros_node.spin_for(0.5)
+    stamps = np.array([stamp_of(m) for m in joint[first:]])
+    steps = np.diff(stamps) / 0.01
+    assert len(stamps) > 100 and np.allclose(steps, 1.0, atol=1e-3), steps.max()
+
+
+def test_set_entity_state_moves_a_hub_and_a_tip_and_the_rod_goes_on_from_there(
+        ros_processes, ros_node, request):
+    ns = namespace(request)
+    start_simulator(ros_processes, ns, 'table1.yaml', markers=False, estimate_window=0.0,
+                    start_paused=True)
+    sim = f'{ns}/rotrod_simulator'
+    damped = urdf('--damping-ratio', '0.1')
+    assert spawn(ros_node, sim, 'far', damped, x=1.0).result.result == Result.RESULT_OK
+    hub = SetEntityState.Request(entity='far/hub', set_twist=True)
+    hub.state.twist.angular.z = 1.5
+    assert ros_node.call_service(SetEntityState, f'{sim}/set_entity_state',
+                                 hub).result.result == Result.RESULT_OK
+    tip = SetEntityState.Request(entity='far/tip', set_pose=True)
+    tip.state.header.frame_id = 'world'
+    tip.state.pose.position.x = 1.0 + R0 + 2e-3        # u = 2 mm at hub angle 0
+    tip.state.pose.position.z = L
+    assert ros_node.call_service(SetEntityState, f'{sim}/set_entity_state',
+                                 tip).result.result == Result.RESULT_OK
+    got = ros_node.call_service(GetEntityState, f'{sim}/get_entity_state',
+                                GetEntityState.Request(entity='far/tip')).state
+    assert (got.pose.position.x, got.pose.position.y) == pytest.approx((1.0 + R0 + 2e-3, 0.0),
+                                                                       abs=1e-12)
+    assert got.twist.angular.z == 1.5
+    # refused, nothing changed: an acceleration; a tip off its rod's plane
+    bad = SetEntityState.Request(entity='far/hub', set_acceleration=True)
+    assert ros_node.call_service(SetEntityState, f'{sim}/set_entity_state',
+                                 bad).result.result == Result.RESULT_OPERATION_FAILED
+    tip.state.pose.position.z = 2 * L
+    answer = ros_node.call_service(SetEntityState, f'{sim}/set_entity_state', tip).result
+    assert answer.result == SetEntityState.Response.INVALID_POSE and 'height' in \
+        answer.error_message
+    # the rod goes on from the state set, holding 1.5 rad/s: it settles at u_s there
+    joint = ros_node.subscribe(f'{ns}/far/joint_states', JointState, qos=1000)
+    ros_node.call_service(SetSimulationState, f'{sim}/set_simulation_state',
+                          SetSimulationState.Request(state=SimulationState(
+                              state=SimulationState.STATE_PLAYING)))
+    settled(ros_node, {'far': joint}, 12.0)
+    assert all(m.velocity[0] == 1.5 for m in joint)
+    assert steady(ros_node, joint) == pytest.approx(static_deflection(0.3, 1.5), rel=2e-3)

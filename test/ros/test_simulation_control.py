@@ -17,17 +17,23 @@ acceleration limit from 0, reaches 2 rad/s within 1 s + setpoint_delay and holds
 so that over one step at 3 s it turns by exactly w dt; the tip's velocity is the
 derivative of its position (the trapezoid rule over one step); the second run equals
 the first float for float; each bad request has the standard's code and changes
-nothing.
+nothing. Then the same client spawns ten rods of different masses from the URDFs of
+``rotrod urdf`` (uri), commands each its own speed, steps, and reads each tip by
+GetEntitiesStates: at steady speed the mass stands at r0 + u_s from its hub, u_s =
+m w^2 r0 / (k - m w^2) (docs/model.md, k = 3 E I / l^3 written out here); it deletes
+one rod during a SimulateSteps goal (answered, the goal steps on), then the rest.
 """
 
 import json
 import math
 import os
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 from interface_tools import build_interfaces
+from ros_harness import console_script
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import SetSimulationState
 
@@ -58,10 +64,35 @@ SEPARATE_PREFIX = Path(sys.prefix) / 'test-cache' / 'simulation_interfaces_clien
 """Where the long test builds the client's own simulation_interfaces (kept while current)."""
 
 
-def run_client(ros_processes, extra_env=None) -> dict:
+E, D, L, R0 = 100e9, 0.003, 0.3, 0.1                    # Table 1 (docs/model.md)
+K = 3 * E * (math.pi * D**4 / 64) / L**3
+WORLD = [{'name': f'm{i}', 'mass': 0.15 + 0.05 * i, 'omega': 1.0 + 0.1 * i, 'x': 0.5 * i}
+         for i in range(10)]
+WORLD_STEPS = 15000
+"""15 s: the ramp at 2 rad/s^2, then ten decay times 1 / (zeta w0) of the free whirl
+(zeta 0.1, w0 >= 8.6 rad/s for the heaviest)."""
+
+
+def world_file(tmp_path) -> Path:
+    """The client's rods: each a URDF file that ``rotrod urdf`` wrote for its mass."""
+    rods = []
+    for rod in WORLD:
+        urdf = tmp_path / f"{rod['name']}.urdf"
+        urdf.write_text(subprocess.run(
+            [*console_script('rotrod'), 'urdf', '--mass', str(rod['mass']),
+             '--damping-ratio', '0.1'], check=True, capture_output=True, text=True).stdout)
+        rods.append({'name': rod['name'], 'urdf': str(urdf), 'omega': rod['omega'],
+                     'x': rod['x'], 'steps': WORLD_STEPS})
+    path = tmp_path / 'world.json'
+    path.write_text(json.dumps(rods))
+    return path
+
+
+def run_client(ros_processes, tmp_path, extra_env=None) -> dict:
     sim = ros_processes.start_console_script('simulator', '--ros-args', *SIMULATOR_PARAMS)
     sim.wait_for_output('ready: drive=velocity', timeout=30)
-    client = ros_processes.start([sys.executable, str(CLIENT), '--omega', str(OMEGA)],
+    client = ros_processes.start([sys.executable, str(CLIENT), '--omega', str(OMEGA),
+                                  '--world', str(world_file(tmp_path))],
                                  name='sim_interfaces_client', extra_env=extra_env)
     assert client.wait(timeout=240) == 0, client.output
     lines = [ln for ln in client.output.splitlines() if ln.startswith('@@REPORT@@')]
@@ -133,17 +164,40 @@ def check_report(report: dict) -> None:
     assert report['play'] == Result.RESULT_OK
     assert report['state_after_play'] == SimulationState.STATE_PLAYING
     assert report['clock_after_play_ns'] > report['second']['tip_3001']['stamp_ns']
+    check_world(report['world'])
 
 
-def test_a_standard_client_steps_resets_replays_and_plays(ros_processes):
-    report = run_client(ros_processes)
+def check_world(world: dict) -> None:
+    """Ten rods spawned, each at its own steady deflection; deleted, one mid-goal."""
+    names = [rod['name'] for rod in WORLD]
+    assert world['spawn'] == Result.RESULT_OK and world['spawned'] == names
+    assert world['step'] == Result.RESULT_OK
+    for rod in WORLD:
+        name, m, w = rod['name'], rod['mass'], rod['omega']
+        assert world['hubs'][f'{name}/hub'] == pytest.approx(w, abs=1e-12)
+        x, y, z = world['tips'][f'{name}/tip']
+        u_s = m * w * w * R0 / (K - m * w * w)
+        assert math.hypot(x - rod['x'], y) - R0 == pytest.approx(u_s, rel=2e-3), name
+        assert z == pytest.approx(L)
+    assert world['delete_during_goal'] == Result.RESULT_OK
+    assert world['steps_after_delete'] > 0                  # the world stepped on
+    assert world['goal_status'] == CANCELED
+    assert world['delete_rest'] == [Result.RESULT_OK] * (len(WORLD) - 1)
+    assert world['delete_again'] == Result.RESULT_NOT_FOUND
+    assert world['left'] == ['hub', 'tip']
+
+
+def test_a_standard_client_steps_resets_replays_plays_and_spawns_rods(ros_processes,
+                                                                       tmp_path):
+    report = run_client(ros_processes, tmp_path)
     check_report(report)
     venv = Path(sys.prefix).resolve()
     assert Path(report['module']).resolve().is_relative_to(venv)
 
 
 @pytest.mark.long      # builds simulation_interfaces once more (minutes; then cached)
-def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes):
+def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes,
+                                                                        tmp_path):
     build = build_interfaces
     build.ensure_built(Path(sys.prefix), package='simulation_interfaces',
                        install_prefix=SEPARATE_PREFIX, install=False)
@@ -152,7 +206,7 @@ def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_pro
     env = {'PYTHONPATH': os.pathsep.join([str(site), os.environ.get('PYTHONPATH', '')]),
            'LD_LIBRARY_PATH': os.pathsep.join([str(lib),
                                                os.environ.get('LD_LIBRARY_PATH', '')])}
-    report = run_client(ros_processes, extra_env=env)
+    report = run_client(ros_processes, tmp_path, extra_env=env)
     check_report(report)
     separate = SEPARATE_PREFIX.resolve()
     assert Path(report['module']).resolve().is_relative_to(separate)
