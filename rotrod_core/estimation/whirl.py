@@ -67,6 +67,7 @@ decay, (inflated) standard deviation and split-window rules reject most such win
 
 from __future__ import annotations
 
+import cmath
 import dataclasses
 import functools
 import math
@@ -88,7 +89,15 @@ _ZERO_PAD = 8               # periodogram length: this many times the number of 
 _SPLIT_SIGMAS = 3.0         # a halves' change within this many std is noise (_split_check)
 _MISFIT_INFLATION = 4.0     # residual variance inflation above which a window misfits
 _SPLIT_TOLERANCE = 1e-5     # rad over a half window: a half's fit to ~1e-5 / (pi f T)
+_TOLERANCE = 1e-8           # rad over the window: the estimate's fit converged
+_DECISION_TOLERANCE = 1e-3  # rad: a fit that decides the drift degree, converged enough
+_DECISION_ITERATIONS = 8    # ... or after this many iterations (a half window's, _half_whirls)
+_MEASURABLE = 1e-8          # a predicted decrease below this fraction of the cost is rounding
+_AHEAD = 0.1                # a step whose successor would be this x the tolerance ends a fit
+_HALF_AHEAD = 1.0           # ... a half window's (_half_whirls: tolerance 1e-5 rad)
 MAX_WINDOW_SAMPLES = 1e6    # longest online window, in sample intervals (docs/realtime.md)
+_FLOATS = (float, np.float64)  # sample types push takes as they are when finite
+_UNIT_BOUND = 2.0 * math.sqrt(2.0)  # |z| < this once scaled by _estimate (parts < 2)
 
 
 @dataclass(frozen=True)
@@ -278,17 +287,75 @@ def estimate_whirl_frequencies(t, u, v, settings: WhirlSettings | None = None
 
 # -- blocks --------------------------------------------------------------------------
 
+def _median(x) -> float:
+    """np.median of a 1-D float array (the same value), without its overhead."""
+    n = len(x)
+    half = n // 2
+    if n % 2:
+        return float(np.partition(x, half)[half])
+    part = np.partition(x, (half - 1, half))
+    return float((part[half - 1] + part[half]) / 2)
+
+
+_GRID_MATCH = 1e-12         # normalized block times this close to the ideal grid's share it
+_CACHED_BLOCKS = 4096       # longest block series whose drift columns are cached
+
+
+@functools.lru_cache(maxsize=16)
+def _regular_drift(samples, per_block, degree):
+    """Normalized block times and weighted Legendre drift columns of an ideal grid (cached).
+
+    ``samples`` evenly spaced samples in blocks of ``per_block``: the block means of
+    their times, normalized to [-1, 1] over the samples' span, and legvander of those
+    times times sqrt(per_block). A sliding window of regular samples meets the same
+    grid on every update.
+    """
+    m = samples // per_block
+    x = (2.0 * per_block * np.arange(m) + (per_block - samples)) / (samples - 1)
+    drift = legendre.legvander(x, degree) * math.sqrt(per_block)
+    x.flags.writeable = drift.flags.writeable = False
+    return x, drift
+
+
+def _drift_columns(x, degree, samples, per_block):
+    """Weighted Legendre drift columns of regular blocks at times ``x``, ideal grid or not.
+
+    ``x``: the normalized block times. The cached ideal grid's when ``x`` is within
+    ``_GRID_MATCH`` of it (the float round-off of sample times: the drift polynomials
+    then span the same functions to that precision), else computed.
+    """
+    if len(x) <= _CACHED_BLOCKS:
+        ideal, drift = _regular_drift(samples, per_block, degree)
+        if len(ideal) == len(x) and float(np.abs(x - ideal).max()) <= _GRID_MATCH:
+            return drift, True
+    return legendre.legvander(x, degree) * math.sqrt(per_block), False
+
+
 class _Blocks:
     """Block means y of the samples, the drift basis and the exponential basis on them.
 
     Rows are weighted by sqrt(samples in the block), so that the least-squares fit of
-    the block means is the least-squares fit of the samples.
+    the block means is the least-squares fit of the samples. ``steps`` and ``dt``: the
+    samples' intervals and their median, when the caller has them; ``regular``: True
+    when the caller knows the intervals within ``_REGULAR_JITTER`` of ``dt``;
+    ``bound``: an upper bound of |z|, when known (:meth:`roundoff`).
+
+    ``tau`` (complex, (m, 1)) and ``scale``: for regular blocks the weighted block
+    means of exp(s tau) are exp(tau s) x ``scale`` (None: 1); None for irregular
+    blocks (see :meth:`exponentials`).
     """
 
-    def __init__(self, t, z, per_block, degree):
-        steps = np.diff(t)
-        self.dt = float(np.median(steps))
-        self.regular = bool(np.all(np.abs(steps - self.dt) <= _REGULAR_JITTER * self.dt))
+    def __init__(self, t, z, per_block, degree, steps=None, dt=None, regular=None,
+                 bound=math.inf):
+        if regular and dt is not None:
+            self.dt, self.regular = dt, True
+        else:
+            if steps is None:
+                steps = t[1:] - t[:-1]
+            self.dt = _median(steps) if dt is None else dt
+            jitter = _REGULAR_JITTER * self.dt
+            self.regular = bool(steps.max() - self.dt <= jitter
+                                and self.dt - steps.min() <= jitter)
         if self.regular:     # whole blocks: the oldest len(t) % per_block samples go
             keep = len(t) // per_block * per_block
             t, z = t[len(t) - keep:], z[len(z) - keep:]
@@ -296,32 +363,58 @@ class _Blocks:
         self.samples = n
         self.per_block = per_block
         self.interval = per_block * self.dt
-        self.t_centre = 0.5 * (t[0] + t[-1])
-        self.half_span = 0.5 * (t[-1] - t[0])
-        self.z_scale = float(np.max(np.abs(z)))
-        tau = t - self.t_centre
+        first, last = float(t[0]), float(t[-1])
+        self.t_centre = 0.5 * (first + last)
+        self.half_span = 0.5 * (last - first)
+        self._z, self._bound = z, bound
+        self.exponent = 0                    # the samples are z 2^exponent (_estimate)
+        self.scale: float | None = None
+        self.tau: np.ndarray | None = None
+        self.mirror = False     # tau is symmetric about 0 (to _GRID_MATCH of the window)
         if self.regular:
             m = n // per_block
-            tb = tau.reshape(m, per_block).mean(axis=1)
-            self.y = z.reshape(m, per_block).mean(axis=1)
-            self.weight = np.full(m, math.sqrt(per_block))
-            self._tau, self._starts = tb, None
+            if per_block == 1:
+                tau_c = np.subtract(t, self.t_centre, dtype=complex)
+                tb = tau_c.real
+                self.y = self.yw = z
+            else:
+                # (np.add.reduce / n is what .mean does, without its overhead)
+                tb = np.add.reduce((t - self.t_centre).reshape(m, per_block), axis=1) / per_block
+                tau_c = tb.astype(complex)
+                self.y = np.add.reduce(z.reshape(m, per_block), axis=1) / per_block
+                self.scale = math.sqrt(per_block)
+                self.yw = self.y * self.scale
+            self.tau = tau_c[:, None]
             self.grid, self.grid_tau = self.y, tb
-            drift = legendre.legvander(tb / self.half_span, degree)
+            self.drift, self.mirror = _drift_columns(tb / self.half_span, degree, n, per_block)
         else:
             # blocks counted back from the newest sample; empty blocks simply absent
+            tau = t - self.t_centre
             index = np.floor((t[-1] + 0.5 * self.dt - t) / self.interval).astype(int)
             starts = np.concatenate(([0], np.flatnonzero(np.diff(index)) + 1))
             counts = np.diff(np.append(starts, n)).astype(float)
             self.y = np.add.reduceat(z, starts) / counts
             self.weight = np.sqrt(counts)
-            self._tau, self._starts, self._counts = tau, starts, counts
+            self._tau, self._starts, self._counts = tau[:, None], starts, counts[:, None]
             drift = np.add.reduceat(legendre.legvander(tau / self.half_span, degree), starts,
                                     axis=0) / counts[:, None]
             self.grid, self.grid_tau = self._uniform_grid(t, z, per_block)
+            self.drift = drift * self.weight[:, None]
+            self.yw = self.y * self.weight
         self.m = len(self.y)
-        self.drift = drift * self.weight[:, None]
-        self.yw = self.y * self.weight
+
+    @functools.cached_property
+    def z_scale(self) -> float:
+        """Max |z| of the samples used."""
+        return float(np.abs(self._z).max())
+
+    def roundoff(self, amplitude) -> bool:
+        """Whether ``amplitude`` is at the float round-off of the samples.
+
+        At most ``_ROUNDOFF`` max |z| (max |z| computed only if the bound does not tell).
+        """
+        return (not amplitude > _ROUNDOFF * self._bound
+                and amplitude <= _ROUNDOFF * self.z_scale)
 
     def _uniform_grid(self, t, z, per_block):
         """Block means of z interpolated onto the regular grid (start values only)."""
@@ -335,13 +428,17 @@ class _Blocks:
 
     def exponentials(self, s):
         """Weighted block means of exp(s tau) and of tau exp(s tau), (m, len(s))."""
-        tau = self._tau[:, None]
+        if self.tau is not None:
+            e = np.exp(self.tau * s)
+            if self.scale is not None:
+                e *= self.scale
+            return e, self.tau * e
+        tau = self._tau
         e = np.exp(tau * s)
         de = tau * e
-        if self._starts is not None:
-            c = self._counts[:, None]
-            e = np.add.reduceat(e, self._starts) / c
-            de = np.add.reduceat(de, self._starts) / c
+        c = self._counts
+        e = np.add.reduceat(e, self._starts) / c
+        de = np.add.reduceat(de, self._starts) / c
         w = self.weight[:, None]
         return e * w, de * w
 
@@ -350,27 +447,73 @@ class _Grid:
     """The regular block series (unweighted), for the start values."""
 
     def __init__(self, y, tau, degree):
-        self.y, self.yw, self.tau = y, y, tau
+        self.y = self.yw = y
         self.m = len(y)
-        self.weight = np.ones(self.m)
-        self.drift = legendre.legvander(tau / max(abs(tau[0]), abs(tau[-1])), degree)
+        self.tau = tau.astype(complex)[:, None]
+        self.scale = None
+        self.drift, self.mirror = _drift_columns(tau / max(abs(tau[0]), abs(tau[-1])),
+                                                 degree, self.m, 1)
 
     def exponentials(self, s):
-        e = np.exp(self.tau[:, None] * s)
-        return e, self.tau[:, None] * e
+        e = np.exp(self.tau * s)
+        return e, self.tau * e
 
 
 # -- fit -----------------------------------------------------------------------------
 
-@dataclass
 class _Fit:
-    s: np.ndarray           # complex poles, 1/s
-    amplitudes: np.ndarray  # complex block-mean amplitudes at the window centre, m
-    drift: np.ndarray       # Legendre coefficients of the drift, m
-    residual: np.ndarray    # weighted residual, m
-    noise_var: float        # per-sample complex noise variance from the residual, m^2
-    unit: np.ndarray        # variances of poles, amplitudes, drift in units of noise_var
-    inflation: float = 1.0  # variance factor for a correlated residual (model misfit)
+    """A fitted window (see :class:`_Fitter`).
+
+    Attributes:
+        s: complex poles, 1/s (a list).
+        amplitudes: complex block-mean amplitudes at the window centre, m (a list).
+        drift: Legendre coefficients of the drift, m (``degree`` + 1).
+        residual: weighted residual, m.
+        noise_var: per-sample complex noise variance from the residual, m^2.
+        pole_unit: variances of the poles in units of noise_var (NaN: not computed).
+        drift_unit: those of the drift coefficients.
+        inflation: variance factor for a correlated residual (model misfit).
+        top: (last drift coefficient, its unit variance), when known without
+            ``drift`` and ``drift_unit`` (else None).
+
+    ``drift``, ``residual`` and ``drift_unit`` may be given as functions: they are
+    then computed when first read.
+    """
+
+    def __init__(self, s, amplitudes, drift, residual, noise_var, pole_unit, degree,
+                 drift_unit=None, top=None):
+        self.s, self.amplitudes, self.degree = s, amplitudes, degree
+        self._drift, self._residual, self.noise_var = drift, residual, noise_var
+        self.pole_unit = pole_unit
+        self._drift_unit = drift_unit
+        self._inflation: float | None = None
+        self.top: tuple[complex, float] | None = top
+
+    @property
+    def drift(self) -> np.ndarray:
+        if callable(self._drift):
+            self._drift = self._drift()
+        return self._drift
+
+    @property
+    def residual(self) -> np.ndarray:
+        if callable(self._residual):
+            self._residual = self._residual()
+        return self._residual
+
+    @property
+    def drift_unit(self) -> np.ndarray:
+        if callable(self._drift_unit):
+            self._drift_unit = self._drift_unit()
+        if self._drift_unit is None:
+            self._drift_unit = np.full(len(self.drift), np.nan)
+        return self._drift_unit
+
+    @property
+    def inflation(self) -> float:
+        if self._inflation is None:
+            self._inflation = _correlation_inflation(self.residual)
+        return self._inflation
 
 
 def _solve(a, b):
@@ -382,7 +525,492 @@ def _solve(a, b):
     return x
 
 
-def _fit(data, s, degree, window, tolerance=1e-8, covariance=True,
+def _triangular_solve(rows, rhs, first, k):
+    """The solution (a list) of R x = rhs, R upper triangular (k, k).
+
+    R = rows[first:first + k][first:first + k] (nested lists; the lower part is not
+    read). ZeroDivisionError if R is singular.
+    """
+    x = [0j] * k
+    for i in range(k - 1, -1, -1):
+        row = rows[first + i]
+        acc = rhs[i]
+        for j in range(i + 1, k):
+            acc -= row[first + j] * x[j]
+        x[i] = acc / row[first + i]
+    return x
+
+
+def _block_solution(block, k):
+    """The projection's solution from R's lower-right block (nested lists).
+
+    The block is R's rows and columns from the last drift column on: [[r_d, ...],
+    [0, Ree, Reg, ce], [0, 0, Rgg, cg], [0, 0, 0, r]] (the lower part is not read),
+    of the columns e (k), de (k) and y: the amplitudes a (Ree a = ce), the Gauss-
+    Newton step of the poles (Rgg (a step) = cg), the decrease of the cost it
+    predicts (|cg|^2) and the cost (|cg|^2 + |r|^2). ZeroDivisionError for a zero
+    diagonal element or amplitude.
+    """
+    if k == 2:                           # the usual case, written out
+        _, r0, r1, r2, r3, r4 = block
+        a1 = r1[5] / r1[2]
+        a0 = (r0[5] - r0[2] * a1) / r0[1]
+        g1 = r3[5] / r3[4]
+        g0 = (r2[5] - r2[4] * g1) / r2[3]
+        decrease = abs(r2[5]) ** 2 + abs(r3[5]) ** 2
+        return [a0, a1], [g0 / a0, g1 / a1], decrease, decrease + abs(r4[5]) ** 2
+    amplitudes = _triangular_solve(block, [row[2 * k + 1] for row in block[1:k + 1]], 1, k)
+    along = [row[2 * k + 1] for row in block[k + 1:2 * k + 1]]
+    gamma = _triangular_solve(block, along, k + 1, k)
+    decrease = sum(abs(x) ** 2 for x in along)
+    return ([*amplitudes], [g / a for g, a in zip(gamma, amplitudes)], decrease,
+            decrease + abs(block[2 * k + 1][2 * k + 1]) ** 2)
+
+
+def _tail_solve(rows, k):
+    """The solution z of R z = c over the block's rows and columns (a list).
+
+    The block as in :func:`_block_solution`: z holds the last drift term's, the
+    amplitudes' and the steps' coefficients of the least-squares fit of y by
+    [drift, e, de].
+    """
+    if k == 2:                           # the usual case, written out
+        r0, r1, r2, r3, r4 = rows[:5]
+        z4 = r4[5] / r4[4]
+        z3 = (r3[5] - r3[4] * z4) / r3[3]
+        z2 = (r2[5] - r2[3] * z3 - r2[4] * z4) / r2[2]
+        z1 = (r1[5] - r1[2] * z2 - r1[3] * z3 - r1[4] * z4) / r1[1]
+        z0 = (r0[5] - r0[1] * z1 - r0[2] * z2 - r0[3] * z3 - r0[4] * z4) / r0[0]
+        return [z0, z1, z2, z3, z4]
+    return _triangular_solve(rows, [row[2 * k + 1] for row in rows[:2 * k + 1]], 0, 2 * k + 1)
+
+
+def _drift_solve(rows, count, known):
+    """The first ``count`` coefficients of R's triangular system, the others ``known``.
+
+    x (a list) with rows[i][:count] x + rows[i][count:count + len(known)] known =
+    rows[i][-1], i < count (R's first rows as lists): the drift coefficients from the
+    exponentials' and the others' known coefficients.
+    """
+    x = [0j] * count
+    for i in range(count - 1, -1, -1):
+        row = rows[i]
+        acc = row[-1]
+        for j, value in enumerate(known, count):
+            acc -= row[j] * value
+        for j in range(i + 1, count):
+            acc -= row[j] * x[j]
+        x[i] = acc / row[i]
+    return x
+
+
+def _first_row_norm(rows, k):
+    """Squared norm of the first row of R^-1: the unit variance of the last drift term.
+
+    R: the block's first 2 k + 1 rows and columns (:func:`_block_solution`).
+    """
+    if k == 2:                           # the usual case, written out
+        r0, r1, r2, r3, r4 = rows[:5]
+        x0 = 1 / r0[0]
+        x1 = -x0 * r0[1] / r1[1]
+        x2 = -(x0 * r0[2] + x1 * r1[2]) / r2[2]
+        x3 = -(x0 * r0[3] + x1 * r1[3] + x2 * r2[3]) / r3[3]
+        x4 = -(x0 * r0[4] + x1 * r1[4] + x2 * r2[4] + x3 * r3[4]) / r4[4]
+        return (abs(x0) ** 2 + abs(x1) ** 2 + abs(x2) ** 2 + abs(x3) ** 2
+                + abs(x4) ** 2)
+    x = [1 / rows[0][0]]
+    for j in range(1, 2 * k + 1):
+        x.append(-sum(x[i] * rows[i][j] for i in range(j)) / rows[j][j])
+    return sum(abs(v) ** 2 for v in x)
+
+
+def _inverse_row_norms(rows, first, k):
+    """Squared norms of the rows of R^-1, R as in :func:`_triangular_solve`."""
+    if k == 2:
+        (a, b), d = rows[first][first:first + 2], rows[first + 1][first + 1]
+        return [abs(1 / a) ** 2 + abs(b / (a * d)) ** 2, abs(1 / d) ** 2]
+    norms = [0.0] * k
+    for j in range(k):                   # column j of R^-1
+        column = _triangular_solve(rows, [1.0 if i == j else 0.0 for i in range(k)], first, k)
+        for i in range(k):
+            norms[i] += abs(column[i]) ** 2
+    return norms
+
+
+@functools.lru_cache(maxsize=64)
+def _identity(n, p):
+    """The first p columns of the (n, n) identity, complex."""
+    columns = np.eye(n, p, dtype=complex, order='F')
+    columns.flags.writeable = False
+    return columns
+
+
+def _finite(values) -> bool:
+    """Whether all values are finite (their sum is, or overflows: then not trusted)."""
+    return cmath.isfinite(sum(values))
+
+
+class _Fitter:
+    """The least-squares fit of :func:`_fit`, run in stages.
+
+    ``run(tolerance)`` iterates until an update moves every pole's phase over the
+    window by less than ``tolerance`` rad, and may be called again with a smaller one
+    (the iterations are those of one run to the smaller tolerance); ``result()`` is
+    the fit so far.
+
+    Each trial of the poles is one Householder QR of A = [drift, e, de, y] (e the
+    exponentials, de their derivatives in s): its leading columns solve the amplitudes
+    and drift (variable projection), its last column's tail is the residual, and the
+    de block, which the QR has orthogonalized against the drift and exponentials, gives
+    Kaufman's Gauss-Newton direction; R also gives the variances (J = [de a, e, drift]
+    is A's first columns scaled, so (J^H J)^-1 is R^-1 R^-H scaled). A trial whose QR
+    is singular (or not finite) is solved as the full least-squares problems instead
+    (:func:`_solve`).
+
+    A step that does not lower the cost although its Gauss-Newton model predicts a
+    decrease below ``_MEASURABLE`` of it ends the fit as one that finds no shorter
+    step that does: a decrease that small is at the rounding of the cost (or moves the
+    poles by ~1e-4 of their standard deviation).
+
+    A Gauss-Newton step shorter than the tolerance ends the run: it is the update that
+    would stop a run (and smaller than the tolerance whatever the line search made of
+    it), and it is taken without a new projection (``pending``). So is a step after
+    which the next one would be shorter than ``ahead`` x the tolerance if the steps
+    keep shrinking as the last two did (the last taken whole; near the minimum they
+    shrink by 1e-2 or faster per step, the estimate's windows measured): the poles then
+    end nearer the minimum than after a run that takes the step and stops at the next.
+    The result has the poles after the pending step, and the amplitudes and drift of
+    the Gauss-Newton model there (the least-squares fit of y by [drift, e, de], exact
+    to second order in the step); the noise variance is the residual of that model,
+    and the parameters' variances are those before the step (they change with it to
+    first order, by about the step's phase over the window in relative terms: ~1e-6 or
+    less for a whole window's fit, ~1e-3 for a half's).
+    """
+
+    def __init__(self, data, s, degree, window, iterations=_MAX_ITERATIONS, pool=None):
+        """``pool``: a dict that keeps work arrays between fits (:meth:`release`)."""
+        self.data = data
+        self.s = [complex(x) for x in s]
+        k = self.k = len(self.s)
+        p = self.p = degree + 1
+        n = self.n = p + 2 * k
+        self.drift = data.drift[:, :p]
+        self.window = window
+        self.decay_limit = 50.0 / window          # keeps exp() finite on a wild step
+        self.left = iterations
+        self.moved = math.inf
+        self.pending: list[complex] | None = None   # the last step, short enough
+        self.pending_size = math.inf
+        self.decrease = math.inf
+        self.last = 0.0          # the last step's length, if taken whole (else 0)
+        self.stuck = False
+        self.qr = data.m > n     # else the least-squares problems are solved whole
+        self._spare = None       # a work array no state uses (see _work)
+        self._kept = None        # the work array of the last result
+        # work arrays of earlier fits with these drift columns (the ideal grid's):
+        # pool[(id(drift), p, k)] = (drift, [work arrays])
+        self._pooled: list | None = None
+        if pool is not None and data.mirror and self.qr:
+            key = (id(data.drift), p, k)
+            entry = pool.get(key)
+            if entry is None or entry[0] is not data.drift:
+                entry = pool[key] = (data.drift, [])
+            self._pooled = entry[1]
+        self.state = self._project(self.s)
+
+    def _work(self):
+        """A copy of A's drift and y columns, and views of its e and de columns.
+
+        A spare one (a rejected trial's or a replaced state's), one from the pool,
+        else a new one.
+        """
+        work = self._spare
+        if work is not None:
+            self._spare = None
+            return work
+        data, k, p, n = self.data, self.k, self.p, self.n
+        m, half = data.m, data.m // 2
+        if self._pooled:
+            a, e, de, mirror = self._pooled.pop()
+            a[:, n] = data.yw
+            return a, e, de, (mirror[0], data.tau[:m - half], mirror[2], mirror[3])
+        a = np.empty((m, n + 1), dtype=complex, order='F')
+        a[:, :p] = self.drift
+        a[:, n] = data.yw
+        e, de = a[:, p:p + k], a[:, p + k:n]
+        mirror = (e[:m - half], data.tau[:m - half], e[half - 1::-1], e[m - half:]) \
+            if data.mirror else None
+        return a, e, de, mirror
+
+    def release(self):
+        """Give the work arrays back to the pool (the results are no longer read)."""
+        if self._pooled is not None:
+            for work in (self._spare, self._kept, self.state[1] if self.state[0] == 'qr'
+                         else None):
+                if work is not None and all(work is not w for w in self._pooled):
+                    self._pooled.append(work)
+            self._spare = self._kept = None
+
+    def _recycle(self, state):
+        if state[0] == 'qr' and state[1] is not self._kept:
+            self._spare = state[1]
+
+    @property
+    def cost(self) -> float:
+        return self.state[-1]
+
+    def _project(self, poles):
+        """The linear solution at ``poles``.
+
+        ('qr', A, QR, R's lower-right block as lists, amplitudes, step, its decrease,
+        cost) (:func:`_block_solution`; step None if not finite), or ('lstsq', e, de,
+        amplitudes and drift, residual, cost).
+        """
+        data, k, p, n = self.data, self.k, self.p, self.n
+        if self.qr:
+            s = poles
+            work = self._work()
+            a, e, de, mirror = work
+            if data.tau is not None:
+                if mirror:               # exp(s tau) at -tau is 1 / exp(s tau)
+                    head, tau, source, target = mirror
+                    np.exp(np.multiply(tau, s, out=head), out=head)
+                    np.divide(1.0, source, out=target)
+                else:
+                    np.exp(np.multiply(data.tau, s, out=e), out=e)
+                if data.scale is not None:
+                    e *= data.scale
+                np.multiply(data.tau, e, out=de)
+            else:
+                e[...], de[...] = data.exponentials(np.array(s))
+            qr, _, _, info = lapack.zgeqrf(a, lwork=n + 1)
+            if info == 0:
+                block = qr[p - 1:n + 1, p - 1:n + 1].tolist()
+                try:
+                    amplitudes, step, decrease, cost = _block_solution(block, k)
+                except ZeroDivisionError:
+                    amplitudes, step = [math.nan], None
+                if _finite(amplitudes) and math.isfinite(cost):
+                    if step is not None and not _finite(step):
+                        step = None
+                    return 'qr', work, qr, block, amplitudes, step, decrease, cost
+            e, de = e.copy(), de.copy()
+        else:
+            e, de = data.exponentials(np.array(poles))
+        basis = np.concatenate((e, self.drift), axis=1)
+        lin = _solve(basis, data.yw)
+        residual = data.yw - basis @ lin
+        return 'lstsq', e, de, lin, residual, float(np.vdot(residual, residual).real)
+
+    def _columns(self, state):
+        """(e, de) of a projection."""
+        if state[0] == 'qr':
+            return state[1][1], state[1][2]
+        return state[1], state[2]
+
+    def _linear(self, state):
+        """(amplitudes, drift coefficients, residual) of a projection.
+
+        For a 'qr' one, the drift coefficients and the residual as functions that
+        compute them.
+        """
+        k, p, n = self.k, self.p, self.n
+        if state[0] == 'lstsq':
+            lin = state[3]
+            return lin[:k], lin[k:], state[4]
+        a, qr = state[1][0], state[2]
+        amplitudes = np.array(state[4])
+        solved: list[np.ndarray] = []
+
+        def drift():                     # R_dd x = c_d - R_de amplitudes
+            if solved:
+                return solved[0]
+            try:
+                x = np.array(_drift_solve(qr[:p, :n + 1].tolist(), p, state[4]))
+            except ZeroDivisionError:    # (a singular drift: not met)
+                x = np.linalg.lstsq(a[:, :p], a[:, n] - a[:, p:p + k] @ amplitudes,
+                                    rcond=None)[0]
+            solved.append(x)
+            return x
+
+        def residual():
+            x = solved[0] if solved else drift()
+            return self.data.yw - a[:, :p] @ x - a[:, p:p + k] @ amplitudes
+        return amplitudes, drift, residual
+
+    def _direction(self, state):
+        """The Gauss-Newton step of the poles and the decrease of the cost it predicts.
+
+        Kaufman's variable-projection Jacobian; the decrease is inf when not known.
+        """
+        k = self.k
+        if state[0] == 'qr' and state[5] is not None:
+            return state[5], state[6]
+        e, de = self._columns(state)
+        amplitudes, _, residual = self._linear(state)
+        if callable(residual):           # (a 'qr' projection without a finite step)
+            residual = residual()
+        step = _solve(np.concatenate((de * amplitudes, e, self.drift), axis=1),
+                      residual)[:k]
+        return step.tolist(), math.inf
+
+    def done(self, tolerance) -> bool:
+        """Whether :meth:`run` to ``tolerance`` would not iterate (any more)."""
+        return (self.left <= 0 or self.stuck or self.moved < tolerance
+                or self.pending_size < tolerance)
+
+    @property
+    def poles(self) -> list[complex]:
+        """The poles, after a pending step."""
+        if self.pending is None:
+            return self.s
+        return self._clip([x + d for x, d in zip(self.s, self.pending)])
+
+    def _clip(self, poles):
+        limit = self.decay_limit
+        if max(abs(x.real) for x in poles) > limit:
+            return [complex(min(max(x.real, -limit), limit), x.imag) for x in poles]
+        return poles
+
+    def run(self, tolerance, iterations=None, ahead=_AHEAD):
+        """Iterate until an update moves the poles by less than ``tolerance`` rad.
+
+        Or for at most ``iterations`` in this call; ``ahead``: see the class.
+        """
+        window = self.window
+        stop = -1 if iterations is None else self.left - iterations
+        while not self.done(tolerance) and self.left > stop:
+            if self.pending is None:
+                self.left -= 1
+                step, decrease = self._direction(self.state)
+                size = max(abs(d) for d in step) * window
+                # the next step's length if the steps keep shrinking as the last two did
+                after = size * size / self.last if self.last else math.inf
+                if size < tolerance or after < ahead * tolerance:
+                    self.pending, self.decrease = step, decrease
+                    self.pending_size = size if size < tolerance else after / ahead
+                    break
+            else:                                # a pending step, now too long
+                step, self.pending, self.pending_size = self.pending, None, math.inf
+                size = max(abs(d) for d in step) * window
+                decrease = self.decrease
+            scale = 1.0
+            while True:
+                trial = self._clip([x + scale * d for x, d in zip(self.s, step)])
+                new = self._project(trial)
+                if new[-1] <= self.cost:
+                    break
+                self._recycle(new)
+                scale *= 0.25
+                # no descent: at the minimum to rounding
+                if scale <= 1e-4 or decrease <= _MEASURABLE * self.cost:
+                    self.stuck = True
+                    break
+            if self.stuck:
+                break
+            self.moved = max(abs(x - y) for x, y in zip(trial, self.s)) * window
+            self.last = size if scale == 1.0 else 0.0
+            self._recycle(self.state)
+            self.s, self.state = trial, new
+        return self
+
+    def result(self, covariance=True) -> _Fit:
+        """The fit at the current poles.
+
+        ``covariance``: also the parameters' variances (in units of the noise
+        variance; else NaN).
+        """
+        k, p, n = self.k, self.p, self.n
+        state = self.state
+        if state[0] == 'qr':     # its columns stay: the result reads them
+            self._kept = state[1]
+        if self.pending is not None and state[0] == 'qr':
+            return self._stepped(covariance)
+        amplitudes, coefficients, residual = self._linear(state)
+        noise_var = state[-1] / max(self.data.m - n, 1)
+        pole_unit = [math.nan] * k
+        drift_unit = None
+        if covariance and state[0] == 'qr':
+            # The diagonal of (J^H J)^-1: the squared row norms of R^-1, the poles'
+            # divided by |amplitude|^2. The poles' rows are those of R's last block's
+            # inverse (R is triangular).
+            norms = _inverse_row_norms(state[3], k + 1, k)
+            pole_unit = [x / abs(a) ** 2 if a else math.inf
+                         for x, a in zip(norms, state[4])]
+            r = state[2][:n, :n]
+
+            def drift_unit():        # the rows of R^-1 are the columns of R^-T
+                columns, info = lapack.ztrtrs(r, _identity(n, p), trans=1)
+                if info != 0:
+                    return np.full(p, np.inf)
+                columns = np.abs(columns)
+                return (columns * columns).sum(axis=0)
+        elif covariance:
+            e, de = self._columns(state)
+            jac = np.concatenate((de * amplitudes, e, self.drift), axis=1)
+            try:
+                unit = np.abs(np.diag(np.linalg.inv(jac.conj().T @ jac)).real)
+            except np.linalg.LinAlgError:
+                unit = np.full(n, np.inf)
+            pole_unit, drift_unit = unit[:k].tolist(), unit[2 * k:]
+        top = None
+        if covariance and state[0] == 'qr':
+            row, amps = state[3][0], state[4]      # R's row of the last drift term
+            try:
+                top = ((row[2 * k + 1] - sum(r * a for r, a in zip(row[1:k + 1], amps)))
+                       / row[0], _first_row_norm(state[3], k))
+            except ZeroDivisionError:
+                pass
+        amplitudes = state[4] if state[0] == 'qr' else amplitudes.tolist()
+        return _Fit(list(self.poles), amplitudes, coefficients, residual, noise_var,
+                    pole_unit, p - 1, drift_unit, top)
+
+    def _stepped(self, covariance):
+        """:meth:`result` after a pending step, from the Gauss-Newton model.
+
+        The least-squares fit of y by [drift, e, de] (R z = c), whose drift and e
+        coefficients are those after the step to second order in it.
+        """
+        k, p, n = self.k, self.p, self.n
+        _, work, qr, block, amplitudes, _, _, _ = self.state
+        tail = _tail_solve(block, k)     # z from the last drift term on
+        y = self.data.yw
+        solved: list[np.ndarray] = []
+
+        def drift():
+            if solved:
+                return solved[0][:p]
+            try:
+                z = np.array(_drift_solve(qr[:p - 1, :n + 1].tolist(), p - 1, tail) + tail)
+            except ZeroDivisionError:    # (a singular drift: not met)
+                z = np.linalg.lstsq(work[0][:, :n], y, rcond=None)[0]
+            solved.append(z)
+            return z[:p]
+
+        def residual():
+            if not solved:
+                drift()
+            return y - work[0][:, :n] @ solved[0]
+        pole_unit = [math.nan] * k
+        drift_unit = top = None
+        if covariance:
+            norms = _inverse_row_norms(block, k + 1, k)
+            pole_unit = [x / abs(a) ** 2 if a else math.inf for x, a in zip(norms, amplitudes)]
+            r = qr[:n, :n]
+
+            def drift_unit():
+                columns, info = lapack.ztrtrs(r, _identity(n, p), trans=1)
+                if info != 0:
+                    return np.full(p, np.inf)
+                columns = np.abs(columns)
+                return (columns * columns).sum(axis=0)
+            top = (tail[0], _first_row_norm(block, k))
+        noise_var = abs(block[2 * k + 1][2 * k + 1]) ** 2 / max(self.data.m - n, 1)
+        return _Fit(list(self.poles), tail[1:k + 1], drift, residual,
+                    noise_var, pole_unit, p - 1, drift_unit, top)
+
+
+def _fit(data, s, degree, window, tolerance=_TOLERANCE, covariance=True,
          iterations=_MAX_ITERATIONS):
     """Least squares over poles ``s`` (1/s), amplitudes and drift, from start poles ``s``.
 
@@ -391,47 +1019,9 @@ def _fit(data, s, degree, window, tolerance=1e-8, covariance=True,
     (Kaufman's approximation), shortened until the residual decreases. Stops when an
     update moves every pole's phase over the window by less than ``tolerance`` rad, or
     after ``iterations``. ``covariance``: also the parameters' variances (else NaN).
+    (:class:`_Fitter` does it.)
     """
-    s = np.asarray(s, dtype=complex)
-    k = len(s)
-    drift = data.drift[:, :degree + 1]
-    decay_limit = 50.0 / window          # keeps exp() finite on a wild step
-
-    def project(poles):
-        e, de = data.exponentials(poles)
-        basis = np.concatenate((e, drift), axis=1)
-        lin = _solve(basis, data.yw)
-        r = data.yw - basis @ lin
-        return basis, de, lin, r, float(np.vdot(r, r).real)
-
-    basis, de, lin, r, cost = project(s)
-    for _ in range(iterations):
-        step = _solve(np.concatenate((de * lin[:k], basis), axis=1), r)[:k]
-        scale = 1.0
-        while scale > 1e-4:
-            trial = s + scale * step
-            if np.abs(trial.real).max() > decay_limit:
-                trial = np.clip(trial.real, -decay_limit, decay_limit) + 1j * trial.imag
-            new = project(trial)
-            if new[-1] <= cost:
-                break
-            scale *= 0.25
-        else:
-            break                        # no descent: at the minimum to rounding
-        moved = float(np.max(np.abs(trial - s))) * window
-        s, (basis, de, lin, r, cost) = trial, new
-        if moved < tolerance:
-            break
-    jac = np.concatenate((de * lin[:k], basis), axis=1)
-    unit = np.full(jac.shape[1], np.nan)
-    if covariance:
-        try:
-            unit = np.abs(np.diag(np.linalg.inv(jac.conj().T @ jac)).real)
-        except np.linalg.LinAlgError:
-            unit[:] = np.inf
-    return _Fit(s=s, amplitudes=lin[:k], drift=lin[k:], residual=r,
-                noise_var=cost / max(data.m - jac.shape[1], 1), unit=unit,
-                inflation=_correlation_inflation(r))
+    return _Fitter(data, s, degree, window, iterations).run(tolerance).result(covariance)
 
 
 def _correlation_inflation(r) -> float:
@@ -524,12 +1114,33 @@ def _drift_degree(fit):
     their variance (it absorbs a slow whirl), one dropped while marginal biases them by
     less than the noise does.
     """
-    degree = len(fit.drift) - 1
-    first = 2 * len(fit.s)
-    while degree > 0 and (abs(fit.drift[degree]) ** 2
-                          <= _DRIFT_SIGNIFICANCE * fit.noise_var * fit.unit[first + degree]):
+    degree = fit.degree
+    while degree > 0:
+        coefficient, unit = (fit.top if degree == fit.degree and fit.top is not None
+                             else (fit.drift[degree], fit.drift_unit[degree]))
+        if abs(coefficient) ** 2 > _DRIFT_SIGNIFICANCE * fit.noise_var * unit:
+            break
         degree -= 1
     return degree
+
+
+def _amplitudes(fit, data) -> list[float]:
+    """|amplitude| of each fitted whirl, m (block means corrected for their gain)."""
+    if data.per_block == 1 or not data.regular:
+        return [abs(a) for a in fit.amplitudes]
+    return np.abs(np.array(fit.amplitudes) / _block_gain(data, fit.s)).tolist()
+
+
+def _snr_db(amplitude, noise_var) -> float:
+    snr = amplitude * amplitude / noise_var if noise_var > 0 else math.inf
+    return 10 * math.log10(snr) if snr > 0 else -math.inf
+
+
+def _undetected(amplitude, noise_var, data, cfg) -> bool:
+    """Whether a whirl is 'noise' (:func:`_whirls`)."""
+    return (data.roundoff(amplitude)
+            or _snr_db(amplitude, noise_var) + 10 * math.log10(data.samples)
+            < cfg.detection_db)
 
 
 def _whirls(fit, data, cfg, window):
@@ -537,22 +1148,21 @@ def _whirls(fit, data, cfg, window):
 
     kind: 'noise' (not detected), 'band', 'decay' or 'std' (see the module docstring).
     """
-    k = len(fit.s)
+    poles = fit.s
     noise_var = fit.noise_var
-    c_pole = fit.unit[:k]
-    amplitudes = np.abs(fit.amplitudes / _block_gain(data, fit.s))
+    c_pole = fit.pole_unit
+    amplitudes = _amplitudes(fit, data)
     threshold_db = cfg.detection_db
     out = []
-    for i in range(k):
-        f = abs(fit.s[i].imag) / TWO_PI
-        decay = -fit.s[i].real
-        amp = float(amplitudes[i])
-        snr = amp * amp / noise_var if noise_var > 0 else math.inf
-        snr_db = 10 * math.log10(snr) if snr > 0 else -math.inf
+    for i, pole in enumerate(poles):
+        f = abs(pole.imag) / TWO_PI
+        decay = -pole.real
+        amp = amplitudes[i]
+        snr_db = _snr_db(amp, noise_var)
         total_db = snr_db + 10 * math.log10(data.samples)
         std = math.sqrt(0.5 * noise_var * c_pole[i] * fit.inflation) / TWO_PI
         kind, problem = '', ''
-        if amp <= _ROUNDOFF * data.z_scale:
+        if data.roundoff(amp):
             kind, problem = 'noise', 'no oscillation (amplitude at float round-off of the offset)'
         elif total_db < threshold_db:
             kind, problem = 'noise', (f'no oscillation above the noise ({total_db:.1f} dB < '
@@ -565,10 +1175,10 @@ def _whirls(fit, data, cfg, window):
         elif not std <= cfg.max_relative_std * f:
             kind, problem = 'std', (f'frequency too uncertain: std {std:.2g} Hz > '
                                     f'{cfg.max_relative_std:g} x {f:.4g} Hz')
-        whirl = Whirl(frequency=math.nan if kind else f, amplitude=amp, decay_rate=decay,
-                      snr_db=snr_db, frequency_std=std)
-        out.append(('forward' if fit.s[i].imag > 0 else 'backward', whirl, kind, problem,
-                    fit.s[i]))
+        whirl = Whirl(frequency=math.nan if kind else f,
+                      amplitude=_scaled(amp, data.exponent) if data.exponent else amp,
+                      decay_rate=decay, snr_db=snr_db, frequency_std=std)
+        out.append(('forward' if pole.imag > 0 else 'backward', whirl, kind, problem, pole))
     return out
 
 
@@ -580,29 +1190,36 @@ def _estimate(t, z, cfg: WhirlSettings, start=None, halves=None):
     nor underflow (|z| ~ 1e-300); amplitudes, offset and noise are scaled back.
     ``halves``: the half-window fits of earlier windows (:func:`_split_check`).
     """
+    if isinstance(halves, _Memo):
+        halves.exponent = 0
     if len(z) == 0:
         return _estimate_unit(t, z, cfg, start, halves)
-    largest = float(max(np.max(np.abs(z.real)), np.max(np.abs(z.imag))))
+    parts = z.view(np.float64) if z.flags.c_contiguous else np.concatenate((z.real, z.imag))
+    largest = float(np.abs(parts).max())
     if largest == 0:
         return _estimate_unit(t, z, cfg, start, halves)
     e = math.frexp(largest)[1] - 1
-    unit = np.empty_like(z)
-    unit.real, unit.imag = np.ldexp(z.real, -e), np.ldexp(z.imag, -e)
-    est, poles = _estimate_unit(t, unit, cfg, start, halves)
-
-    def back(x):
-        with np.errstate(over='ignore'):
-            return float(np.ldexp(x, e))
-    est = dataclasses.replace(
-        est, offset=complex(back(est.offset.real), back(est.offset.imag)),
-        noise_rms=back(est.noise_rms),
-        forward=dataclasses.replace(est.forward, amplitude=back(est.forward.amplitude)),
-        backward=dataclasses.replace(est.backward, amplitude=back(est.backward.amplitude)))
-    return est, poles
+    if isinstance(halves, _Memo):
+        halves.exponent = e
+    if -1000 < e < 1000:
+        unit = z * math.ldexp(1.0, -e)
+    else:
+        unit = np.empty_like(z)
+        unit.real, unit.imag = np.ldexp(z.real, -e), np.ldexp(z.imag, -e)
+    # (amplitudes, offset and noise are scaled back as the estimate is made: _scaled)
+    return _estimate_unit(t, unit, cfg, start, halves, e)
 
 
-def _estimate_unit(t, z, cfg: WhirlSettings, start=None, halves=None):
-    """:func:`_estimate` on data of order 1.
+def _scaled(x: float, exponent: int) -> float:
+    """X 2^exponent (inf past the float range)."""
+    try:
+        return math.ldexp(x, exponent)
+    except OverflowError:
+        return math.copysign(math.inf, x)
+
+
+def _estimate_unit(t, z, cfg: WhirlSettings, start=None, halves=None, exponent=0):
+    """:func:`_estimate` on data of order 1: z 2^exponent are the samples.
 
     The poles include whirls rejected for decay or uncertainty: they are the start
     values for the next window. ``start``: poles to start from (else searched).
@@ -611,78 +1228,138 @@ def _estimate_unit(t, z, cfg: WhirlSettings, start=None, halves=None):
     if n < 2:
         return _no_estimate(f'too few samples ({n})', samples=n)
     span = float(t[-1] - t[0])
-    gap = float(np.max(np.diff(t)))
+    steps = t[1:] - t[:-1]
+    gap = float(steps.max())
     if gap > cfg.max_gap * span:
         return _no_estimate(f'gap of {gap:.3g} s between samples (> {cfg.max_gap:g} of the '
                             f'{span:.3g} s window)', samples=n, window=span)
-    dt = float(np.median(np.diff(t)))
+    dt = _median(steps)
     # (a subnormal dt makes the ratio inf: more samples per block than there are)
     per_block = max(1, int(math.floor(min(cfg.block_interval / dt, n + 1.0) + 1e-6)))
     if n // per_block < cfg.min_blocks:
         return _no_estimate(f'window too short: {n} samples make {n // per_block} blocks of '
                             f'{per_block}, {cfg.min_blocks} needed', samples=n, window=span)
-    data = _Blocks(t, z, per_block, cfg.drift_degree)
+    data = _Blocks(t, z, per_block, cfg.drift_degree, steps, dt, bound=_UNIT_BOUND)
+    data.exponent = exponent
     window = 2.0 * data.half_span
     common = dict(time=data.t_centre, window=window, samples=data.samples)
     if data.m < cfg.min_blocks or len(data.grid) < cfg.min_blocks:
         return _no_estimate(f'window too short: {data.m} blocks, {cfg.min_blocks} needed',
                             **common)
+    memo = halves if isinstance(halves, _Memo) else None
+    regular_dt = data.dt if data.regular else None
     if start:
-        warm, lost, poles = _fitted_estimate(data, cfg, window, start, common)
+        warm, lost, poles = _fitted_estimate(data, cfg, window, start, common, memo)
         if not lost:
-            return _split_check(t, z, cfg, per_block, warm, poles, halves), poles
+            return _split_check(t, z, cfg, per_block, warm, poles, halves, regular_dt), poles
     grid = _Grid(data.grid, data.grid_tau, cfg.drift_degree)
     poles = _start_values(grid, data.interval, cfg, window)
     if not poles:
         return _no_estimate('no frequency in the band', **common)
-    estimate, _, poles = _fitted_estimate(data, cfg, window, poles, common)
-    return _split_check(t, z, cfg, per_block, estimate, poles, halves), poles
+    estimate, _, poles = _fitted_estimate(data, cfg, window, poles, common, memo)
+    return _split_check(t, z, cfg, per_block, estimate, poles, halves, regular_dt), poles
 
 
-def _half_whirls(t, z, cfg, per_block, poles):
+def _half_whirls(t, z, cfg, per_block, poles, memo=None, dt=None):
     """{'forward'/'backward': (frequency, its white-noise std), Hz} over (t, z).
 
     The whole window's procedure (all drift terms, then the significant ones) from the
     whole window's poles. A whirl not detected above the noise is left out, and so is
     a sign with two poles; nothing when the samples make fewer than ``min_blocks``
     blocks. The standard deviation is the one for a white residual (not inflated):
-    the spread of the frequency if the model fits.
+    the spread of the frequency if the model fits. ``dt``: the window's sample
+    interval when its samples are regular (so are the half's).
+
+    When the drift terms are dropped (the last half did so too, or no ``memo``), the
+    choice is made from the fit with all of them once its poles move by less than
+    ``_DECISION_TOLERANCE`` or after ``_DECISION_ITERATIONS``: such a fit over half a
+    window often lets the drift take the whirls, and wanders slowly through a flat
+    minimum far from the whirls' poles (no more than noise decides where it ends);
+    the fit that follows starts from the whole's poles. When that fit keeps them all,
+    it runs to the end and decides again.
     """
     if len(t) // per_block < cfg.min_blocks:
         return {}
-    data = _Blocks(t, z, per_block, cfg.drift_degree)
+    data = _Blocks(t, z, per_block, cfg.drift_degree, dt=dt, regular=dt is not None,
+                   bound=_UNIT_BOUND)
     if data.m < cfg.min_blocks:
         return {}
     window = 2.0 * data.half_span
-    fit = _fit(data, poles, cfg.drift_degree, window, tolerance=_SPLIT_TOLERANCE)
-    degree = _drift_degree(fit)
+    pool = memo.pool if memo is not None else None
+    fitters = [_Fitter(data, poles, cfg.drift_degree, window, pool=pool)]
+    fitter = fitters[0]
+    if memo is None or memo.half_drops is not False:
+        fitter.run(_DECISION_TOLERANCE, _DECISION_ITERATIONS)
+    else:
+        fitter.run(_SPLIT_TOLERANCE, ahead=_HALF_AHEAD)
+    while True:
+        fit = fitter.result()
+        degree = _drift_degree(fit)
+        if degree < cfg.drift_degree or fitter.done(_SPLIT_TOLERANCE):
+            break
+        fitter.run(_SPLIT_TOLERANCE, ahead=_HALF_AHEAD)
+    if memo is not None:
+        memo.half_drops = degree < cfg.drift_degree
     if degree < cfg.drift_degree:
-        fit = _fit(data, fit.s, degree, window, tolerance=_SPLIT_TOLERANCE)
-    whirls = _whirls(fit, data, cfg, window)
-    names = [name for name, *_ in whirls]
-    return {name: (abs(pole.imag) / TWO_PI, whirl.frequency_std / math.sqrt(fit.inflation))
-            for name, whirl, kind, _, pole in whirls
-            if kind != 'noise' and names.count(name) == 1}
+        # from the whole's poles: all drift terms may take a whirl over a half window,
+        # and move its pole far (a start there found a wrong minimum now and then)
+        fitters.append(_Fitter(data, poles, degree, window, pool=pool))
+        fit = fitters[-1].run(_SPLIT_TOLERANCE, ahead=_HALF_AHEAD).result()
+    found: dict[str, list] = {}      # per sign: (frequency, std) or None if undetected
+    for pole, amplitude, unit in zip(fit.s, _amplitudes(fit, data), fit.pole_unit):
+        found.setdefault('forward' if pole.imag > 0 else 'backward', []).append(
+            None if _undetected(amplitude, fit.noise_var, data, cfg) else
+            (abs(pole.imag) / TWO_PI, math.sqrt(0.5 * fit.noise_var * unit) / TWO_PI))
+    for used in fitters:
+        used.release()
+    return {name: fits[0] for name, fits in found.items()
+            if len(fits) == 1 and fits[0] is not None}
 
 
 _KEPT_HALVES = 64
+_LEGENDRE_AT_0 = (1.0, 0.0, -0.5, 0.0, 0.375, 0.0, -0.3125, 0.0, 0.2734375)  # P_j(0), j <= 8
 """Half-window fits an online estimator keeps (the newest)."""
 
 
-def _kept_half_whirls(halves, t, z, cfg, per_block, poles):
+class _Memo(dict):
+    """An online estimator's memory of earlier windows.
+
+    Its half-window fits (the dict, by the half's samples as given), whether the last
+    whole and half windows dropped drift terms or components (None: not known), and
+    the fits' work arrays. The latter two order the work and spare allocations
+    (:func:`_fitted_estimate`, :func:`_half_whirls`, :class:`_Fitter`).
+    """
+
+    whole_drops: bool | None = None
+    half_drops: bool | None = None
+    exponent = 0            # the window's samples are scaled by 2^-exponent (_estimate)
+
+    def __init__(self):
+        super().__init__()
+        self.pool: dict = {}                # the fits' work arrays (_Fitter)
+
+
+def _kept_half_whirls(halves, t, z, cfg, per_block, poles, dt=None):
     """:func:`_half_whirls`, from ``halves`` when these samples were fitted before."""
     if halves is None or not len(t):
-        return _half_whirls(t, z, cfg, per_block, poles)
-    key = (float(t[0]), float(t[-1]), len(t), complex(z[0]), complex(z[-1]), per_block)
+        return _half_whirls(t, z, cfg, per_block, poles, None, dt)
+    memo = halves if isinstance(halves, _Memo) else None
+    # by the samples as given (the fit is on them scaled by a power of two, which gives
+    # the same frequencies to the bit)
+    e = memo.exponent if memo is not None else 0
+    first, last = z[[0, -1]].tolist()
+    key = (float(t[0]), float(t[-1]), len(t), math.ldexp(first.real, e),
+           math.ldexp(first.imag, e), math.ldexp(last.real, e), math.ldexp(last.imag, e),
+           per_block)
     found = halves.get(key)
     if found is None:
-        found = halves[key] = _half_whirls(t, z, cfg, per_block, poles)
+        found = halves[key] = _half_whirls(t, z, cfg, per_block, poles, memo, dt)
         if len(halves) > _KEPT_HALVES:
             del halves[next(iter(halves))]
     return found
 
 
-def _split_check(t, z, cfg, per_block, estimate, poles, halves=None):
+def _split_check(t, z, cfg, per_block, estimate, poles, halves=None, dt=None):
     """``estimate`` without the whirls whose halves of the window disagree with the whole.
 
     A whirl is rejected when the mean of its frequencies over the two halves differs
@@ -697,15 +1374,16 @@ def _split_check(t, z, cfg, per_block, estimate, poles, halves=None):
     windows, by the half's samples. A sliding window whose update interval divides
     half the window meets its first half again as an earlier window's second half:
     the same samples, fitted to the same tolerance (from that window's poles).
+    ``dt``: the window's sample interval when its samples are regular.
     """
     accepted = [name for name in ('forward', 'backward')
                 if not math.isnan(getattr(estimate, name).frequency)]
     if not accepted or math.isinf(cfg.max_split_change):
         return estimate
-    poles = np.asarray(poles, dtype=complex)
+    poles = [complex(x) for x in poles]
     half = len(t) // 2
-    first = _kept_half_whirls(halves, t[:half], z[:half], cfg, per_block, poles)
-    second = _kept_half_whirls(halves, t[half:], z[half:], cfg, per_block, poles)
+    first = _kept_half_whirls(halves, t[:half], z[:half], cfg, per_block, poles, dt)
+    second = _kept_half_whirls(halves, t[half:], z[half:], cfg, per_block, poles, dt)
     changes, reasons = {}, [estimate.reason] if estimate.reason else []
     for name in accepted:
         if name not in first or name not in second:    # a half cannot judge it
@@ -723,27 +1401,43 @@ def _split_check(t, z, cfg, per_block, estimate, poles, halves=None):
     return dataclasses.replace(estimate, reason='; '.join(reasons), **changes)
 
 
-def _fitted_estimate(data, cfg, window, poles, common):
+def _fitted_estimate(data, cfg, window, poles, common, memo=None):
     """Fit from start ``poles``, choose the drift, judge and name the whirls.
 
     Returns the estimate, whether a whirl was lost (a sign without a detected, in-band
     component: a start from the previous estimate then needs a fresh search), and the
-    poles of the whirls detected in band.
+    poles of the whirls detected in band. ``memo``: see :class:`_Memo`.
     """
-    fit = _fit(data, poles, cfg.drift_degree, window)
-    whirls = _whirls(fit, data, cfg, window)
     # Refit with the significant drift terms only, without components that are only
     # noise, and without the smaller of two components of one sign (they would model
     # together a modulation of one whirl, e.g. a chirp, and misplace it): none of these
-    # may cost the whirls' frequencies precision.
-    degree = _drift_degree(fit)
-    largest: dict[str, tuple[float, int]] = {}
-    for i, (name, whirl, kind, _, _) in enumerate(whirls):
-        if kind != 'noise' and whirl.amplitude > largest.get(name, (-1.0, 0))[0]:
-            largest[name] = (whirl.amplitude, i)
-    keep = sorted(i for _, i in largest.values())
-    if keep and (degree < cfg.drift_degree or len(keep) < len(whirls)):
-        fit = _fit(data, fit.s[keep], degree, window)
+    # may cost the whirls' frequencies precision. (When the last window dropped some,
+    # or not known, decided from the fit with all drift terms once its poles move by
+    # less than _DECISION_TOLERANCE, and again once it has converged if that drops
+    # nothing.)
+    pool = memo.pool if memo is not None else None
+    fitter = _Fitter(data, poles, cfg.drift_degree, window, pool=pool)
+    fitter.run(_DECISION_TOLERANCE if memo is None or memo.whole_drops is not False
+               else _TOLERANCE)
+    while True:
+        fit = fitter.result()
+        whirls = _whirls(fit, data, cfg, window)
+        degree = _drift_degree(fit)
+        largest: dict[str, tuple[float, int]] = {}
+        for i, (name, whirl, kind, _, _) in enumerate(whirls):
+            if kind != 'noise' and whirl.amplitude > largest.get(name, (-1.0, 0))[0]:
+                largest[name] = (whirl.amplitude, i)
+        keep = sorted(i for _, i in largest.values())
+        refit = bool(keep) and (degree < cfg.drift_degree or len(keep) < len(whirls))
+        if refit or fitter.done(_TOLERANCE):
+            break
+        fitter.run(_TOLERANCE)
+    if memo is not None:
+        memo.whole_drops = refit
+    fitters = [fitter]
+    if refit:
+        fitters.append(_Fitter(data, [fit.s[i] for i in keep], degree, window, pool=pool))
+        fit = fitters[-1].run(_TOLERANCE).result()
         dropped = [rec for rec in whirls if rec[0] not in largest]
         whirls = _whirls(fit, data, cfg, window) + dropped
     chosen: dict[str, tuple] = {}
@@ -770,12 +1464,16 @@ def _fitted_estimate(data, cfg, window, poles, common):
                 reasons.append(f'{name}: fitted beside a whirl made too uncertain by a '
                                f'misfit of the model (residual correlation: variance '
                                f'x{fit.inflation:.3g})')
+    offset = sum(c * p for c, p in zip(fit.drift.tolist(), _LEGENDRE_AT_0))
+    e = data.exponent
     estimate = WhirlEstimate(
         forward=whirls_out.get('forward', Whirl()),
         backward=whirls_out.get('backward', Whirl()),
-        offset=complex(legendre.legval(0.0, fit.drift)), noise_rms=math.sqrt(fit.noise_var),
-        reason='; '.join(reasons), **common)
+        offset=complex(_scaled(offset.real, e), _scaled(offset.imag, e)),
+        noise_rms=_scaled(math.sqrt(fit.noise_var), e), reason='; '.join(reasons), **common)
     poles = [c[4] for c in chosen.values() if c[2] not in ('noise', 'band')]
+    for used in fitters:
+        used.release()
     return estimate, lost, poles
 
 
@@ -873,7 +1571,7 @@ def fit_whirls(t, u, v, guess: tuple | None = None) -> WhirlFit:
     forward, backward = (0, 1) if fit.s[0].imag > 0 else (1, 0)
     if not fit.s[forward].imag > 0 > fit.s[backward].imag:
         raise ValueError('fit_whirls: the fit did not keep a whirl of each sign')
-    at_start = fit.amplitudes * np.exp(fit.s * (t[0] - data.t_centre))
+    at_start = np.array(fit.amplitudes) * np.exp(np.array(fit.s) * (t[0] - data.t_centre))
     return WhirlFit(centre=complex(fit.drift[0]), forward=complex(at_start[forward]),
                     backward=complex(at_start[backward]),
                     forward_omega=float(fit.s[forward].imag),
@@ -896,7 +1594,10 @@ class WhirlEstimator:
     gap longer than ``settings.max_gap`` of the window. Memory is a ring of about
     twice the window. When ``update_interval`` divides half the window, a window's
     first half is an earlier window's second half: its fit for the stationarity check
-    is kept and not repeated (each update then fits one half window, not two).
+    is kept and not repeated (each update then fits one half window, not two). It also
+    remembers whether the last window's fits dropped drift terms (the next ones decide
+    that first when they did: before the fit with all of them has converged to the
+    end) and keeps the fits' work arrays; these change the cost, not the procedure.
 
     Args:
         window: length of the analysed window, s (1 s resolves whirls above 0.1 Hz).
@@ -939,7 +1640,7 @@ class WhirlEstimator:
         self._first = math.nan
         self._last_update = -math.inf
         self._poles: list[complex] = []
-        self._halves: dict = {}
+        self._halves = _Memo()
         self.estimate = WhirlEstimate(reason='window not filled')
 
     @property
@@ -956,7 +1657,9 @@ class WhirlEstimator:
         Raises ValueError for a non-finite value or a time not after the previous one
         (the sample is then not stored).
         """
-        t, u, v = (finite_number(name, x) for name, x in (('t', t), ('u', u), ('v', v)))
+        if not (type(t) in _FLOATS and type(u) in _FLOATS and type(v) in _FLOATS
+                and math.isfinite(t + u + v)):     # (a float sum overflows: checked below)
+            t, u, v = (finite_number(name, x) for name, x in (('t', t), ('u', u), ('v', v)))
         if self._end and not t > self._t[self._end - 1]:
             raise ValueError(f'sample times must increase strictly: {t!r} s after '
                              f'{self._t[self._end - 1]!r} s')
