@@ -1,6 +1,7 @@
 """A fleet of rods: N rods in the namespaces rod0 .. rod{N-1}, from one command.
 
-    python -m rotrod_ros.fleet --rods 10 [--processes] [--profile] [--duration S] ...
+    python -m rotrod_ros.fleet --rods 10 [--processes] [--profile] [--record]
+        [--duration S] ...
 
 By default one simulator process holds them all, a world of rods (``rods:=N``: their
 interfaces under ``rodK/``, frames ``rodK/rotor``, stepped as one batch); with
@@ -8,7 +9,9 @@ interfaces under ``rodK/``, frames ``rodK/rotor``, stepped as one batch); with
 before worlds, kept to compare). Every simulator gets config/table1.yaml,
 config/fleet.yaml (real time, markers off), then the given files. With ``--profile``
 each rod also gets its own profile publisher in its namespace, streaming
-config/fleet.yaml's profile (Eq. 26, looped) on its ``cmd/omega``. The processes log to
+config/fleet.yaml's profile (Eq. 26, looped) on its ``cmd/omega``. With ``--record``
+each rod gets a rerun logger in its namespace writing ``<log-dir>/rodK.rrd`` (``rerun
+<log-dir>/*.rrd`` opens them all). The processes log to
 ``<log-dir>/<name>.log``; the fleet runs until ``--duration`` has passed or Ctrl-C,
 then stops them all. A full ROS install does the same with ``ros2 launch rotrod
 fleet.launch.py rods:=10`` (launch/fleet.launch.py).
@@ -42,8 +45,12 @@ def namespaces(rods: int) -> list[str]:
 
 
 def fleet_commands(rods: int, *, profile: bool = False, params_files=(),
-                   processes: bool = False) -> dict[str, list[str]]:
-    """The commands (``<name>`` -> argv) that start the fleet: one world, or ``processes``."""
+                   processes: bool = False, record: Path | None = None) -> dict[str, list[str]]:
+    """The commands (``<name>`` -> argv) that start the fleet.
+
+    One world, or a simulator per rod (``processes``); a profile publisher per rod with
+    ``profile``; a rerun logger per rod writing into the directory ``record`` if given.
+    """
     files = []
     for f in (*(str(share_file(p)) for p in PARAM_FILES), *map(str, params_files)):
         files += ['--params-file', f]
@@ -59,16 +66,20 @@ def fleet_commands(rods: int, *, profile: bool = False, params_files=(),
         if profile:
             cmds[f'{ns[1:]}_profile_publisher'] = [
                 *executable('profile_publisher'), '--ros-args', '-r', f'__ns:={ns}', *files]
+        if record is not None:
+            cmds[f'{ns[1:]}_rerun_logger'] = [
+                *executable('rerun_logger'), '--ros-args', '-r', f'__ns:={ns}',
+                '-p', f'output:={Path(record) / (ns[1:] + ".rrd")}']
     return cmds
 
 
 def start(rods: int, log_dir: Path, *, profile: bool = False, params_files=(),
           env: dict | None = None, ready_timeout: float = 60.0,
-          processes: bool = False) -> Processes:
+          processes: bool = False, record: bool = False) -> Processes:
     """Start the fleet and wait until every simulator is ready; return the processes."""
     procs = Processes(Path(log_dir), ros_environment(dict(os.environ) if env is None else env))
     cmds = fleet_commands(rods, profile=profile, params_files=params_files,
-                          processes=processes)
+                          processes=processes, record=Path(log_dir) if record else None)
     try:
         for name, cmd in cmds.items():
             if name.endswith('_simulator'):
@@ -95,6 +106,8 @@ def main(argv: list | None = None) -> int:
                              'instead of one world')
     parser.add_argument('--profile', action='store_true',
                         help="a profile publisher per rod (config/fleet.yaml's profile)")
+    parser.add_argument('--record', action='store_true',
+                        help='a rerun logger per rod, writing <log-dir>/rodK.rrd')
     parser.add_argument('--duration', type=float, default=None,
                         help='wall seconds to run (default: until Ctrl-C)')
     parser.add_argument('--params-file', action='append', default=[], type=Path,
@@ -115,7 +128,8 @@ def main(argv: list | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     try:
         procs = start(args.rods, args.log_dir, profile=args.profile,
-                      params_files=args.params_file, processes=args.processes)
+                      params_files=args.params_file, processes=args.processes,
+                      record=args.record)
     except (DemoError, FileNotFoundError) as exc:
         print(f'fleet: {exc}', file=sys.stderr)
         return 1
@@ -135,8 +149,19 @@ def main(argv: list | None = None) -> int:
     except KeyboardInterrupt:
         pass
     finally:
-        procs.stop_all()
+        stop_fleet(procs)
     return 0
+
+
+def stop_fleet(procs: Processes) -> None:
+    """Stop the publishers and loggers, then the simulators.
+
+    A logger's file then ends with the simulator's last publication.
+    """
+    for name in list(procs.procs):
+        if not name.endswith('_simulator'):
+            procs.stop(name)
+    procs.stop_all()
 
 
 if __name__ == '__main__':

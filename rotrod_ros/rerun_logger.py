@@ -163,7 +163,11 @@ class RerunLogger(Node):
                     'frequencies/estimate': lambda m, info: self._on_frequencies(m, info,
                                                                                  True),
                     '/diagnostics': self._on_diagnostics}
-        self._simulator = self.get_namespace().rstrip('/') + '/' + SIMULATOR
+        # the statuses of the rod: a simulator's own in this namespace, or those of
+        # the rod of a world named as this namespace ('/rotrod_simulator: rod3')
+        namespace = self.get_namespace().rstrip('/')
+        self._simulator = namespace + '/' + SIMULATOR
+        self._rod_status = f': {namespace.lstrip("/")}' if namespace else None
         self._halted = 'no'
         self._handlers = [handlers[i.name] for i in SAMPLES]
 
@@ -298,7 +302,8 @@ class RerunLogger(Node):
 
     def _on_diagnostics(self, msg: DiagnosticArray, info) -> None:
         for status in msg.status:
-            if status.hardware_id != self._simulator:
+            if status.hardware_id != self._simulator and not (
+                    self._rod_status and status.name.endswith(self._rod_status)):
                 continue
             halted = next((kv.value for kv in status.values if kv.key == 'halted'), 'no')
             if halted != self._halted:

@@ -19,9 +19,11 @@ from geometry_msgs.msg import Vector3Stamped
 from node_probes import stamp
 from ros_harness import console_script
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
 
 from rotrod_core import RodParams, simulate
 from rotrod_core.command.profiles import TableProfile
+from rotrod_core.reporting import recording
 from rotrod_ros import fleet
 from rotrod_ros.simulator import stop_report
 
@@ -139,3 +141,43 @@ def test_fleet_launch_file_starts_the_same_nodes_with_the_same_files():
                      for e in c.elts)]
     assert [f'config/{e.value}' for e in files[0].elts] == list(fleet.PARAM_FILES)
     compile(launch.read_text(), str(launch), 'exec')
+
+
+@pytest.mark.ros
+def test_the_fleet_records_every_rod_of_its_world_each_with_its_own_motion_and_halt(
+        ros_processes, ros_node, tmp_path):
+    """``rotrod fleet --rods 2 --record``: a rerun logger per rod. In a torque-driven
+    world rod1 is driven past max_omega and halts; rod0 is not driven. Each file holds
+    its own rod: rod1's its halt (an ERROR event, from the world's status named after
+    it) and w up to the bound, rod0's w at 0 throughout and no halt."""
+    torque = tmp_path / 'torque.yaml'
+    torque.write_text('/**/rotrod_simulator:\n  ros__parameters:\n    drive: torque\n'
+                      '    hub_inertia: 0.0624\n    max_omega: 1.0\n')
+    proc = ros_processes.start([*console_script('rotrod'), 'fleet', '--rods', '2', '--record',
+                                '--duration', '60', '--log-dir', str(tmp_path),
+                                '--params-file', str(torque)], name='fleet')
+    proc.wait_for_output('fleet: 2 rods running', timeout=60)
+    for rod in ('rod0', 'rod1'):
+        ros_node.spin_until(lambda r=rod: 'receiving: first joint state' in (
+            tmp_path / f'{r}_rerun_logger.log').read_text(), 60, f'{rod} logger receiving')
+    pub = ros_node.node.create_publisher(Float64, '/rod1/cmd/torque', 10)
+    ros_node.spin_until(lambda: pub.get_subscription_count() > 0, 10, 'rod1/cmd/torque')
+    pub.publish(Float64(data=0.5))                    # 8 rad/s^2: past 1 rad/s in 0.13 s
+    ros_node.spin_until(lambda: 'rod1: simulation halted' in (
+        tmp_path / 'world_simulator.log').read_text(), 30, 'rod1 halted')
+    time.sleep(2.0)                                   # the halt's status reaches the logger
+    os.kill(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=60) == 0
+    for rod, halts in (('rod0', 0), ('rod1', 1)):
+        out = tmp_path / f'{rod}.rrd'
+        _, texts = recording.read_component(out, recording.EVENTS, 'TextLog:text')
+        found = [t[0] for t in texts if t[0].startswith('halted:')]
+        assert len(found) == halts, (rod, found)
+        _, omega = recording.read_component(out, recording.OMEGA, 'Scalars:scalars')
+        w = np.array([row[0] for row in omega])
+        assert len(w) > 50, rod
+        if halts:
+            assert 'beyond max_omega 1 rad/s' in found[0]
+            assert 0.9 < w.max() <= 1.0                  # up to the bound, frozen there
+        else:
+            assert np.all(w == 0.0)
