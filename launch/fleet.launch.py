@@ -4,8 +4,9 @@ One simulator holds ``rods`` rods (default 10) as one world, their interfaces in
 namespaces rod0 .. rod{rods-1}, with config/table1.yaml and config/fleet.yaml (real
 time, markers off); ``processes:=true`` starts a simulator process per rod instead (the
 layout before worlds); with ``profiles:=true`` a profile publisher per rod streams Eq. 26
-in a loop. The same fleet without ``launch``: ``python -m rotrod_ros.fleet --rods 10
-[--processes] [--profile]``.
+in a loop; with ``record:=true`` a rerun logger per rod writes ``rodK.rrd`` in the
+working directory. The same fleet without ``launch``: ``python -m rotrod_ros.fleet
+--rods 10 [--processes] [--profile] [--record]``.
 """
 
 import os
@@ -24,6 +25,7 @@ def rods(context):
     count = int(LaunchConfiguration('rods').perform(context))
     profiles = LaunchConfiguration('profiles').perform(context).lower() == 'true'
     processes = LaunchConfiguration('processes').perform(context).lower() == 'true'
+    record = LaunchConfiguration('record').perform(context).lower() == 'true'
     actions = []
     if not processes:
         actions.append(Node(package='rotrod', executable='simulator',
@@ -40,16 +42,22 @@ def rods(context):
             actions.append(Node(package='rotrod', executable='profile_publisher',
                                 namespace=ns, name='rotrod_profile_publisher',
                                 parameters=params, output='screen'))
+        if record:
+            actions.append(Node(package='rotrod', executable='rerun_logger', namespace=ns,
+                                name='rotrod_rerun_logger', output='screen',
+                                parameters=[{'output': f'{ns}.rrd'}]))
     return actions
 
 
 def generate_launch_description():
-    """The fleet: launch arguments rods (10), processes (false) and profiles (false)."""
+    """The fleet: launch arguments rods (10), processes, profiles and record (false)."""
     return LaunchDescription([
         DeclareLaunchArgument('rods', default_value='10', description='number of rods'),
         DeclareLaunchArgument('processes', default_value='false',
                               description='a simulator process per rod instead of one world'),
         DeclareLaunchArgument('profiles', default_value='false',
                               description='a profile publisher per rod'),
+        DeclareLaunchArgument('record', default_value='false',
+                              description='a rerun logger per rod (rodK.rrd)'),
         OpaqueFunction(function=rods),
     ])

@@ -135,7 +135,7 @@ def test_fleet_launch_file_starts_the_same_nodes_with_the_same_files():
     executables = {ast.literal_eval(kw.value) for node in ast.walk(tree)
                    if isinstance(node, ast.Call) and getattr(node.func, 'id', '') == 'Node'
                    for kw in node.keywords if kw.arg == 'executable'}
-    assert executables == {'simulator', 'profile_publisher'}
+    assert executables == {'simulator', 'profile_publisher', 'rerun_logger'}
     files = [c for c in ast.walk(tree) if isinstance(c, ast.Tuple)
              and all(isinstance(e, ast.Constant) and str(e.value).endswith('.yaml')
                      for e in c.elts)]
