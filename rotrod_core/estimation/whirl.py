@@ -356,7 +356,7 @@ class _Blocks:
             jitter = _REGULAR_JITTER * self.dt
             self.regular = bool(steps.max() - self.dt <= jitter
                                 and self.dt - steps.min() <= jitter)
-        if self.regular:     # whole blocks: the oldest len(t) % per_block samples go
+        if self.regular and len(t) % per_block:     # whole blocks: the oldest go
             keep = len(t) // per_block * per_block
             t, z = t[len(t) - keep:], z[len(z) - keep:]
         n = len(t)
@@ -883,7 +883,7 @@ class _Fitter:
             if self.pending is None:
                 self.left -= 1
                 step, decrease = self._direction(self.state)
-                size = max(abs(d) for d in step) * window
+                size = max(map(abs, step)) * window
                 # the next step's length if the steps keep shrinking as the last two did
                 after = size * size / self.last if self.last else math.inf
                 if size < tolerance or after < ahead * tolerance:
@@ -892,7 +892,7 @@ class _Fitter:
                     break
             else:                                # a pending step, now too long
                 step, self.pending, self.pending_size = self.pending, None, math.inf
-                size = max(abs(d) for d in step) * window
+                size = max(map(abs, step)) * window
                 decrease = self.decrease
             scale = 1.0
             while True:
@@ -1194,7 +1194,10 @@ def _estimate(t, z, cfg: WhirlSettings, start=None, halves=None):
         halves.exponent = 0
     if len(z) == 0:
         return _estimate_unit(t, z, cfg, start, halves)
-    parts = z.view(np.float64) if z.flags.c_contiguous else np.concatenate((z.real, z.imag))
+    try:
+        parts = z.view(np.float64)
+    except ValueError:                   # (not contiguous)
+        parts = np.concatenate((z.real, z.imag))
     largest = float(np.abs(parts).max())
     if largest == 0:
         return _estimate_unit(t, z, cfg, start, halves)
