@@ -138,7 +138,7 @@ def _records(out: np.ndarray, bad: np.ndarray, finite: np.ndarray,
     last = out[-1, :8, :].T.tolist()
     r_max = out[:, 8, :].max(axis=0).tolist()
     records = [BlockRecord(out, i, steps, None, last[i], r_max[i]) for i in range(n)]
-    for i in np.flatnonzero(bad.any(axis=0)):
+    for i in np.flatnonzero(bad.any(axis=0)).tolist():
         t = int(np.argmax(bad[:, i]))
         reason = NON_FINITE if not finite[t, i] else TOO_FAR if far[t, i] else TOO_FAST
         records[i] = BlockRecord(
