@@ -765,7 +765,11 @@ class SimulationEngine:
             ex = self.execution
             if ex is not None:
                 times = t0 + dt * np.arange(1, steps + 1)
-                return np.asarray(ex.trajectory.omega(times - ex.start), dtype=float)
+                # the step that ends at the last point's time (to rounding) ends at its
+                # speed exactly: w then holds the goal's final speed, not 1e-14 beside it
+                taus = np.where(times >= ex.end - 1e-9 * dt, ex.trajectory.end_time,
+                                times - ex.start)
+                return np.asarray(ex.trajectory.omega(taus), dtype=float)
             piece = self._shaper.segment(t0 + dt, t0 + steps * dt)
             if piece is not None:
                 return piece

@@ -199,3 +199,22 @@ def test_a_hold_reuses_its_maps_and_moves_as_the_steps_taken_one_by_one(monkeypa
     alone.command_omega(1.5)
     alone.advance(200)
     same_motion([rods[2].state], [alone.state], 'hold')
+
+
+@pytest.mark.parametrize('block', [3, 10])
+def test_a_trajectory_ends_at_its_last_point_s_speed_exactly_whatever_its_start(block):
+    """The step that ends at the last point's time (to rounding of the clock) ends at
+    its speed: w then holds exactly the goal's final speed. A goal with positions (its
+    path checked at every step), started at many step instants: before, one start in
+    six ended 1e-14 beside it."""
+    points = (TrajectoryPoint(1.5, position=0.6, velocity=0.8, acceleration=0.2),
+              TrajectoryPoint(3.0, position=2.0, velocity=1.0, acceleration=0.0))
+    for offset in range(0, 400, 7):
+        world = World(1000.0)
+        rod = SimulationEngine(EngineConfig(max_angular_acceleration=2.0), world=world)
+        world.advance(offset)
+        rod.command_trajectory(TrajectoryGoal(points))
+        while world.time < offset / 1000 + 3.5:
+            world.advance(block)
+        assert rod.trajectory_outcomes[-1].code == 'SUCCESSFUL', offset
+        assert rod.state.omega == 1.0, offset
