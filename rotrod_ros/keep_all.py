@@ -89,9 +89,11 @@ class KeepAllPublishing:
         return self._subscribed.get(name, True)
 
     def look(self, names: Iterable[str], every: float) -> None:
-        """Read the subscriber counts of ``names`` if ``every`` wall seconds went by
-        since the last look (0: now). Reading one costs ~2 us; a subscriber that
-        matches meanwhile gets the publications from the next look on."""
+        """Read the subscriber counts of ``names`` if ``every`` wall seconds went by.
+
+        ``every`` 0: now. Reading one costs ~2 us; a subscriber that
+        matches meanwhile gets the publications from the next look on.
+        """
         now = time.monotonic()
         if every and now < self._next_look:
             return

@@ -614,7 +614,8 @@ class RealTimeLoop(Generic[SettingsT]):
         (:meth:`submit`) is applied, in arrival order, at the current simulated time,
         i.e. before the first step; commands arriving during a request wait for the
         next one. A parameter change (:meth:`reconfigure`) takes effect when made,
-        between requests (one made during a request at its end). Then the steps are taken; each publication that falls due (every
+        between requests (one made during a request at its end). Then the steps are
+        taken; each publication that falls due (every
         physics_rate/publish_rate steps, counted from simulated time 0 or the last
         reset of time, and the state at that instant if not yet published) is
         published at once. Nothing depends on the wall clock, so the same requests
@@ -635,7 +636,8 @@ class RealTimeLoop(Generic[SettingsT]):
         """Take a request's steps and publish what falls due (the loop's thread).
 
         Under the lock from one publication instant to the next, not longer: between
-        them a service takes its turn (a parameter change waits for the end). A reset, a play or a stop
+        them a service takes its turn (a parameter change waits for the end). A reset,
+        a play or a stop
         (:attr:`_interrupts`) and a cancel end the request at the next publication
         instant, so no request, however many steps it asks, takes the world away
         from its users.
@@ -875,8 +877,9 @@ class RealTimeLoop(Generic[SettingsT]):
 
     # ----------------------------------------------------------------- status
     def report(self, force: bool = False) -> None:
-        """Send every rod's :class:`Status` when due (diagnostics_rate) or ``force``;
-        between, the status of each rod whose level changed.
+        """Send every rod's :class:`Status` when due (diagnostics_rate) or ``force``.
+
+        Between, the status of each rod whose level changed is sent.
 
         The levels are looked at most every LEVEL_CHECK wall seconds per LEVEL_RODS
         rods (as fast as possible a cycle is one publication: thousands a second).

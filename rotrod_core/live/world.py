@@ -131,9 +131,11 @@ def _matrix(rows: list, times: np.ndarray) -> np.ndarray:
 
 def _records(out: np.ndarray, bad: np.ndarray, finite: np.ndarray,
              far: np.ndarray) -> list[BlockRecord]:
-    """Each rod's record of a block: ``out`` (steps, 9, rods) as computed, ``bad`` the
-    refused steps (steps, rods; ``finite`` and ``far`` say why). A rod's steps are good
-    up to its first refused one."""
+    """Each rod's record of a block.
+
+    ``out`` (steps, 9, rods) as computed, ``bad`` the refused steps (steps, rods;
+    ``finite`` and ``far`` say why). A rod's steps are good up to its first refused one.
+    """
     steps, _, n = out.shape
     last = out[-1, :8, :].T.tolist()
     r_max = out[:, 8, :].max(axis=0).tolist()

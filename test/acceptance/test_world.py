@@ -13,9 +13,9 @@ import subprocess
 
 import numpy as np
 import pytest
-from rclpy.qos import QoSProfile
 from geometry_msgs.msg import PointStamped, PoseStamped, Vector3Stamped
 from node_probes import namespace, start_simulator
+from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from simulation_interfaces.msg import EntityFilters, Resource, Result, SimulationState
 from simulation_interfaces.msg import SpawnEntity as SpawnRequest
