@@ -107,7 +107,7 @@ def qos(interface: Interface, conditions=()):
 
 
 def _service_qos(depth: int):
-    """rclpy's services QoS (reliable, volatile) with a queue of ``depth`` requests."""
+    """The services QoS of rclpy (reliable, volatile) with a queue of ``depth`` requests."""
     from rclpy.qos import QoSProfile, qos_profile_services_default
     return QoSProfile(history=qos_profile_services_default.history, depth=depth,
                       reliability=qos_profile_services_default.reliability,
