@@ -36,7 +36,7 @@ setup(
         ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
         ('share/' + PACKAGE + '/urdf', glob('urdf/*.urdf')),
     ],
-    install_requires=['numpy', 'scipy', 'PyYAML'],
+    install_requires=['numpy', 'scipy', 'PyYAML', 'threadpoolctl'],
     extras_require={
         # rclpy and the standard messages from PyPI wheels (a ROS install provides them).
         'ros': ['ros-jazzy-rclpy[fastrtps]', 'ros-jazzy-common-interfaces'],

@@ -100,6 +100,20 @@ def _destroy_node(node) -> None:
     node.destroy_node()
 
 
+def single_threaded_blas() -> None:
+    """Run BLAS and LAPACK (numpy's and scipy's OpenBLAS) on the calling thread only.
+
+    A node's linear algebra is small (the whirl estimator's fits, the planner's solves)
+    and runs at a rate: with a pool, OpenBLAS's worker threads busy-wait after each
+    call for the next one, and at the simulator's 100 Hz of estimates they never rest.
+    Measured: the simulator at its defaults with one subscriber took 96 % of a core in
+    that thread, against 12 % for the rest of the node (docs/realtime.md). The limit
+    is threadpoolctl's, for the whole process (the library's pools are shared).
+    """
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(limits=1)
+
+
 def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
         args: list | None = None, *,
         until: Callable | None = None, started: Callable | None = None,
@@ -126,6 +140,7 @@ def run(name: str, make_node: Callable, parser: argparse.ArgumentParser,
     """
     argv = list(sys.argv if args is None else args)
     parser.parse_args(remove_ros_args(argv)[1:])
+    single_threaded_blas()
     if own_signals:
         rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
         for signum in (signal.SIGINT, signal.SIGTERM):

@@ -12,6 +12,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from node_probes import (
     by_time,
     collect,
+    cpu_seconds,
     drain,
     get_parameter,
     hann_mean,
@@ -316,6 +317,37 @@ def test_frequency_estimate_from_the_motion_matches_eq28_and_is_nan_at_rest(
         # stamped at the window's middle: half a window before the last sample in it
         published = [j for j in joint if stamp(j) <= stamp(m) + 0.5 + 1e-6]
         assert stamp(published[-1]) == pytest.approx(stamp(m) + 0.5, abs=0.011)
+
+
+CPU_AT_DEFAULTS = 0.5
+"""Of one core: the simulator at its defaults with every sample topic subscribed
+(bench_realtime measures ~0.2; a busy-waiting thread took it to ~1.1)."""
+
+
+def test_at_its_defaults_with_every_sample_topic_subscribed_the_simulator_takes_under_half_a_core(
+        ros_processes, ros_node, request):
+    """The simulator at 2 rad/s, its defaults (1 kHz physics, 100 Hz samples, the whirl
+    estimate and markers on), its five sample topics subscribed: the process's CPU
+    time over 8 s of wall time is below CPU_AT_DEFAULTS of one core.
+
+    It guards against a thread that spins: OpenBLAS's worker busy-waited between the
+    whirl estimator's fits (node_main.single_threaded_blas).
+    """
+    ns = namespace(request)
+    sim = start_simulator(ros_processes, ns)
+    joint = ros_node.subscribe(f'{ns}/joint_states', JointState, qos=1000)
+    ros_node.subscribe(f'{ns}/tip/deflection', Vector3Stamped, qos=1000)
+    ros_node.subscribe(f'{ns}/tip/position', PointStamped, qos=1000)
+    ros_node.subscribe(f'{ns}/frequencies', DynamicFrequencies, qos=1000)
+    estimate = ros_node.subscribe(f'{ns}/frequencies/estimate', WhirlEstimate, qos=1000)
+    omega_publisher(ros_node, ns).publish(Float64(data=2.0))
+    ros_node.spin_until(lambda: joint and joint[-1].velocity[0] == 2.0, 30, 'w = 2 rad/s')
+    ros_node.spin_until(lambda: any(m.f1_valid for m in estimate), 30, 'a whirl estimate')
+    start, cpu0 = time.monotonic(), cpu_seconds(sim.pid)
+    ros_node.spin_for(8.0)
+    share = (cpu_seconds(sim.pid) - cpu0) / (time.monotonic() - start)
+    assert share < CPU_AT_DEFAULTS, f'simulator CPU {100 * share:.0f} % of one core'
+    assert joint[-1].velocity[0] == 2.0 and estimate[-1].f1_valid
 
 
 def fifo_threads(pid):
