@@ -203,6 +203,32 @@ def test_affine_chain_is_the_sequential_product():
         propagation.affine_chain(phi[0], x0[0], work=work)
 
 
+@pytest.mark.parametrize('steps', [1, 2, 36, 37, 114])
+def test_adjoint_and_sensitivity_chains_are_their_step_by_step_recursions(steps):
+    """The blocked chains equal the recursions they stand for, step by step, to rounding:
+    lambda_k = lambda_k+1 phi_k from lambda_N = final, and S_k+1 = phi_k S_k + forcing_k
+    from S_0 = 0 (with leading axes, and steps not a multiple of the block)."""
+    rng = np.random.default_rng(5)
+    phi = np.eye(5) + 0.05 * rng.standard_normal((3, steps, 5, 5))
+    final = np.eye(4, 5)
+    lam = propagation.adjoint_chain(phi, final)
+    assert lam.shape == (3, steps + 1, 4, 5)
+    row = np.broadcast_to(final, (3, 4, 5))
+    assert np.array_equal(lam[:, steps], row)
+    for k in range(steps - 1, -1, -1):
+        row = row @ phi[:, k]
+        assert np.allclose(lam[:, k], row, rtol=1e-12, atol=1e-14)
+    forcing = rng.standard_normal((3, steps, 5, 7))
+    S = propagation.sensitivity_chain(phi, forcing)
+    assert S.shape == (3, steps + 1, 5, 7) and not S[:, 0].any()
+    s = np.zeros((3, 5, 7))
+    for k in range(steps):
+        s = phi[:, k] @ s + forcing[:, k]
+        assert np.allclose(S[:, k + 1], s, rtol=1e-12, atol=1e-13)
+    assert np.allclose(propagation.sensitivity_chain(phi[0], forcing[0]), S[0],
+                       rtol=1e-13, atol=1e-15)
+
+
 # -- one kernel: the four consumers on shared cases --------------------------------------
 
 def _spin_up():
