@@ -105,7 +105,39 @@ def measure(quick: bool = False) -> list:
             us, 'us', target=Target('<=', 10),
             note=f'{us / 10:.2f} % of the 1 ms budget at 1 kHz', fmt='.3g')
 
+    rows += measure_world()
     rows += measure_batch(quick)
+    return rows
+
+
+def measure_world() -> list:
+    """The simulator's physics: a world of 1, 10 and 100 rods (velocity drive, each
+    commanded its own speed), stepped in blocks of 10 (one 100 Hz publication at 1 kHz),
+    ramping and holding; the cost per physics step of the whole world."""
+    from rotrod_core.live.engine import EngineConfig, SimulationEngine
+    from rotrod_core.live.world import World
+    rows = []
+    for rods in (1, 10, 100):
+        for phase, settle in (('ramping at 0.5 rad/s^2', 500), ('holding its speed', 8000)):
+            world = World(1000.0)
+            for i in range(rods):
+                SimulationEngine(EngineConfig(), world=world,
+                                 name=f'rod{i}').command_omega(2.0 + 0.01 * i)
+            world.advance(settle)
+            blocks = 100
+
+            def run(world=world, blocks=blocks):
+                for _ in range(blocks):
+                    world.advance(10)
+            t, _ = best_of(run, 3)
+            us = 1e6 * t / (10 * blocks)
+            rows.append(Row(
+                'core', f'World of {rods} rod{"s" * (rods > 1)}, velocity drive, '
+                f'{phase}, 1 ms steps in blocks of 10: cost per step of the whole world '
+                f'(best of 3 x {10 * blocks})', us, 'us',
+                target=Target('<=', 10) if rods == 1 else None,
+                note=f'{us / rods:.2f} us per rod; {us / 10:.2f} % of the 1 ms budget at '
+                     '1 kHz', fmt='.3g'))
     return rows
 
 

@@ -283,8 +283,9 @@ def main(argv: list | None = None) -> int:
                 if args.quick else [], 1800),
                ('bench_realtime.py', ['--duration', f'{duration:g}'], 4 * duration + 600),
                ('bench_fleet.py', ['--duration', f'{duration:g}',
-                                   *(['--rods', '3'] if args.quick else [])],
-                2 * duration + 600)]
+                                   *(['--rods', '3', '--large-rods', '10']
+                                     if args.quick else [])],
+                10 * duration + 900)]
     with tempfile.TemporaryDirectory(prefix='rotrod-bench-') as tmp:
         tmp = Path(tmp)
         for script, bench_args, timeout in benches:

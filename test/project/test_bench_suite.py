@@ -168,7 +168,7 @@ def test_run_all_end_to_end_with_stand_in_benches(tmp_path, monkeypatch, capsys)
     assert calls[0][1] == ['--quick'] and calls[1][1] == ['--quick']
     assert calls[4][1] == ['--seeds', '10', '--eq26-seeds', '3']
     assert calls[5][1] == ['--duration', '5']
-    assert calls[6][1] == ['--duration', '5', '--rods', '3']
+    assert calls[6][1] == ['--duration', '5', '--rods', '3', '--large-rods', '10']
 
     assert run_all.main(['--quick', '--write', '--page', str(readme)]) == 1
     new = readme.read_text()
