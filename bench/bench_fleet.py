@@ -91,17 +91,17 @@ SAMPLE_TOPICS = {'tip/deflection': Vector3Stamped, 'joint_states': JointState,
 """The four topics published with every sample; the lags are tip/deflection's."""
 
 
-def stamps(node, topic: str, msg_type=Vector3Stamped) -> list:
+def stamps(node, topic: str, msg_type=Vector3Stamped) -> tuple[list, object]:
     """Subscribe to ``topic`` as bytes; return the list of (message bytes, DDS source
     time s, DDS reception time s, time this process's callback ran s), filled as
-    messages arrive."""
+    messages arrive, and the subscription (destroyed after its run)."""
     out: list = []
-    node.node.create_subscription(
+    subscription = node.node.create_subscription(
         msg_type, topic,
         lambda raw, info: out.append((raw, info['source_timestamp'] * 1e-9,
                                       info['received_timestamp'] * 1e-9, time.time())),
         1000, raw=True)
-    return out
+    return out, subscription
 
 
 def stamp_of(raw: bytes) -> float:
@@ -164,8 +164,9 @@ def start_rods(run: Run, logs: Path) -> tuple[Processes, list[str]]:
 def measure_run(node, run: Run, duration: float) -> dict:
     """One run; per-rod lags and messages of tip/deflection, the CPU of its processes."""
     topics = SAMPLE_TOPICS if run.all_topics else {'tip/deflection': Vector3Stamped}
-    received = {ns: {t: stamps(node, f'{ns}/{t}', typ) for t, typ in topics.items()}
-                for ns in run.namespaces()}
+    subscribed = {ns: {t: stamps(node, f'{ns}/{t}', typ) for t, typ in topics.items()}
+                  for ns in run.namespaces()}
+    received = {ns: {t: out for t, (out, _) in by.items()} for ns, by in subscribed.items()}
     with tempfile.TemporaryDirectory(prefix='rotrod-fleet-') as logs:
         procs, rod_processes = start_rods(run, Path(logs))
         try:
@@ -196,6 +197,11 @@ def measure_run(node, run: Run, duration: float) -> dict:
             n1 = {ns: {t: len(r) for t, r in by.items()} for ns, by in received.items()}
         finally:
             procs.stop_all()
+            # the next run starts with no subscription of this one: an observer that
+            # kept them took every later run's messages on rod0.. once per earlier run
+            for by in subscribed.values():
+                for _, subscription in by.values():
+                    node.node.destroy_subscription(subscription)
     span = t1 - t0
     per_rod = {}
     for ns, by in received.items():
