@@ -19,17 +19,23 @@ from rotrod_core.estimation.whirl import WhirlEstimator, stream_estimator
 from .parameters import NodeSettings
 
 
-def whirl_estimator(settings: NodeSettings) -> WhirlEstimator | None:
-    """Whirl-frequency estimator over the published motion (None: estimates off)."""
+def whirl_estimator(settings: NodeSettings, stagger: int = 0) -> WhirlEstimator | None:
+    """Whirl-frequency estimator over the published motion (None: estimates off).
+
+    ``stagger``: the rod's place in its world (its estimates come that many samples
+    later, modulo the samples per estimate: :func:`stream_estimator`).
+    """
     return stream_estimator(settings.estimate_window, settings.publish_rate,
-                            settings.estimate_rate)
+                            settings.estimate_rate, stagger)
 
 
 class Observation:
     """The sensor noise, whirl estimator and marker trail of the node's samples."""
 
-    def __init__(self, settings: NodeSettings) -> None:
-        self.estimator = whirl_estimator(settings)
+    def __init__(self, settings: NodeSettings, stagger: int = 0) -> None:
+        self.stagger = stagger
+        """The rod's place in its world: when its estimates fall (:func:`whirl_estimator`)."""
+        self.estimator = whirl_estimator(settings, stagger)
         """Pushed the published (u, v); replaced, not reset in place (see :meth:`reset`)."""
         self._noise = np.random.default_rng(settings.noise_seed)
         self._trail: deque[tuple[float, ...]] = deque(
@@ -43,7 +49,7 @@ class Observation:
         """
         if (new.estimate_window, new.estimate_rate, new.publish_rate) != (
                 old.estimate_window, old.estimate_rate, old.publish_rate):
-            self.estimator = whirl_estimator(new)
+            self.estimator = whirl_estimator(new, self.stagger)
         if new.noise_seed != old.noise_seed:
             self._noise = np.random.default_rng(new.noise_seed)
         if new.marker_trail_length != old.marker_trail_length:
@@ -58,7 +64,7 @@ class Observation:
         deflection as well as the state.
         """
         self._trail.clear()
-        self.estimator = whirl_estimator(settings)
+        self.estimator = whirl_estimator(settings, self.stagger)
         if noise:
             self._noise = np.random.default_rng(settings.noise_seed)
 

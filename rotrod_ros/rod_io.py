@@ -128,16 +128,20 @@ class RodIO:
         settings: the node's settings (frame prefix, noise, estimate, ...).
         conditions: keep_all conditions that hold (see :func:`rotrod_ros.interfaces.qos`).
         on_goal: registers a trajectory goal's token with its server (see the node).
+        stagger: the rod's place in the world (0 for the first): its whirl estimates
+            come that many samples after the first rod's, modulo the samples per
+            estimate, so that the rods' estimates do not all fall on one sample.
     """
 
     def __init__(self, node, loop: RealTimeLoop, engine: SimulationEngine, prefix: str,
-                 pose: Pose, settings: NodeSettings, conditions=(), on_goal=None):
+                 pose: Pose, settings: NodeSettings, conditions=(), on_goal=None,
+                 stagger: int = 0):
         self.node, self.loop, self.engine = node, loop, engine
         self.name, self.prefix, self.pose = engine.name, prefix, pose
         frame_prefix = settings.frame_prefix
         self.rotor_frame = frame_prefix + prefix + ROTOR_FRAME
         self.world_frame = frame_prefix + WORLD_FRAME
-        self.observation = Observation(settings)
+        self.observation = Observation(settings, stagger)
         self.messages = messages.SampleMessages(self.rotor_frame, self.world_frame)
         self.marker_frames = messages.MarkerFrames(self.world_frame,
                                                    prefix + MARKER_NAMESPACE)

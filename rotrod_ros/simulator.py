@@ -143,6 +143,7 @@ class SimulatorNode(Node):
         self._status_name = f'{self.get_fully_qualified_name()}: simulation'
         self.world = World(engine_config.physics_rate)
         self.rods: dict[str, rod_io.RodIO] = {}
+        self._rods_added = 0     # each rod's place: when its whirl estimates fall
         """Each rod's ROS side, by its name in the world ('' for a single started rod)."""
         self.started = [name for name, _ in started_rods(values['rods'])]
         """The rods the parameters describe (the others were spawned)."""
@@ -196,7 +197,9 @@ class SimulatorNode(Node):
         with self.loop.lock:
             engine = SimulationEngine(config, world=self.world, name=name)
             io = rod_io.RodIO(self, self.loop, engine, prefix, pose, self.settings,
-                              self._conditions, on_goal=self._goals.__setitem__)
+                              self._conditions, on_goal=self._goals.__setitem__,
+                              stagger=self._rods_added)
+            self._rods_added += 1
             self.rods[name] = io
         io.publish_description(config, self.settings.disk_radius)
         return io

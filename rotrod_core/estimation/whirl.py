@@ -1608,15 +1608,24 @@ class WhirlEstimator:
             half of it is the tolerance on the window's edges).
         update_interval: sample time between estimates, s.
         settings: model and acceptance limits (:class:`WhirlSettings`).
+        phase: sample time by which the first estimate after the window fills (and so
+            every later one) comes later, s, 0 <= phase < update_interval: estimators
+            filled at one instant (the rods of a world) update at different samples,
+            their work spread over the interval instead of falling on one.
     """
 
     def __init__(self, window: float = 1.0, sample_interval: float = 1e-3,
-                 update_interval: float = 0.1, settings: WhirlSettings | None = None):
+                 update_interval: float = 0.1, settings: WhirlSettings | None = None,
+                 phase: float = 0.0):
         self.window = finite_number('WhirlEstimator.window', window, positive=True)
         self.sample_interval = finite_number('WhirlEstimator.sample_interval',
                                              sample_interval, positive=True)
         self.update_interval = finite_number('WhirlEstimator.update_interval',
                                              update_interval, nonnegative=True)
+        self.phase = finite_number('WhirlEstimator.phase', phase, nonnegative=True)
+        if self.phase and not self.phase < self.update_interval:
+            raise ValueError(f'WhirlEstimator.phase ({phase} s) must be shorter than the '
+                             f'update interval ({update_interval} s)')
         if self.sample_interval >= self.window:
             raise ValueError(f'WhirlEstimator.sample_interval ({sample_interval} s) must be '
                              f'shorter than the window ({window} s)')
@@ -1673,8 +1682,11 @@ class WhirlEstimator:
         self._end += 1
         if math.isnan(self._first):
             self._first = t
-        if self.filled and t - self._last_update >= self.update_interval * (1 - 1e-9):
-            return self.update()
+        if self.filled:
+            if self._last_update == -math.inf:    # just filled: the first one is due
+                self._last_update = t + self.phase - self.update_interval
+            if t - self._last_update >= self.update_interval * (1 - 1e-9):
+                return self.update()
         return None
 
     def update(self) -> WhirlEstimate:
@@ -1708,13 +1720,17 @@ class WhirlEstimator:
         self._begin, self._end = 0, live
 
 
-def stream_estimator(window: float, sample_rate: float,
-                     update_rate: float) -> WhirlEstimator | None:
+def stream_estimator(window: float, sample_rate: float, update_rate: float,
+                     stagger: int = 0) -> WhirlEstimator | None:
     """The estimator over a published stream, as the simulator node and its bags run it.
 
     ``window`` s of samples published at ``sample_rate`` Hz, an estimate every
     1/``update_rate`` s of sample time; None when ``window`` is 0 (estimates off).
+    ``stagger``: the k-th rod of a world (0: the first, and a single rod) updates
+    k samples later, modulo the samples per update (:attr:`WhirlEstimator.phase`).
     """
     if not window:
         return None
-    return WhirlEstimator(window, 1.0 / sample_rate, 1.0 / update_rate)
+    per_update = max(1, int(round(sample_rate / update_rate)))
+    return WhirlEstimator(window, 1.0 / sample_rate, 1.0 / update_rate,
+                          phase=(stagger % per_update) / sample_rate)

@@ -658,3 +658,20 @@ def test_stream_estimator_estimates_at_its_update_rate_over_its_window():
     due = [k for k in range(300) if est.push(t[k], z[k].real, z[k].imag) is not None]
     assert due[0] in (99, 100) and np.all(np.diff(due) == 10)
     assert est.estimate.f1 == pytest.approx((W0 - w) / (2 * math.pi), rel=1e-6)
+
+
+def test_staggered_estimators_update_k_samples_later_with_the_same_estimates():
+    """The k-th rod of a world (stagger k) estimates k samples after the first, modulo
+    the ten samples per estimate, every tenth sample after; at constant w, Eq. 28's f1
+    all the same. A phase of a whole interval or more is refused."""
+    t = np.arange(400) / 100.0
+    z = step_start(t, 1.0)
+    first = None
+    for k in (0, 1, 3, 9, 10, 13):
+        est = stream_estimator(1.0, 100.0, 10.0, stagger=k)
+        due = [j for j in range(400) if est.push(t[j], z[j].real, z[j].imag) is not None]
+        first = due[0] if k == 0 else first
+        assert due[0] == first + k % 10 and np.all(np.diff(due) == 10)
+        assert est.estimate.f1 == pytest.approx((W0 - 1.0) / (2 * math.pi), rel=1e-6)
+    with pytest.raises(ValueError, match='phase'):
+        WhirlEstimator(1.0, 0.01, 0.1, phase=0.1)
