@@ -140,8 +140,9 @@ def test_a_trajectory_is_followed_as_the_quintic_through_its_points_at_the_physi
         assert f.desired.velocities[0] == pytest.approx(w, abs=NS)
         assert f.actual.velocities[0] == pytest.approx(f.desired.velocities[0], abs=1e-14)
         assert abs(f.error.positions[0]) < 1e-6
-    # joint_states: w is the quintic's derivative at every instant with feedback; below, one joint state every 10 ms of the goal's 3 s (this subscription
-    # keeps 1000), the start a stamp minus its time from start (epoch stamps: ~0.2 us)
+    # joint_states: w is the quintic's derivative at every instant with feedback; below,
+    # one joint state every 10 ms of the goal's 3 s (this subscription keeps 1000), the
+    # start a stamp minus its time from start (epoch stamps: ~0.2 us)
     rows = [(tau_of[nanoseconds(m.header.stamp)], m.position[0], m.velocity[0])
             for m in joint if nanoseconds(m.header.stamp) in tau_of]
     assert len(rows) == len(tau_of)

@@ -115,6 +115,8 @@ def test_n_rods_each_under_its_namespace_deflect_as_the_closed_form(
     assert 'ready: 3 rods (rod0, rod1, rod2)' in sim.output
 
 
+@pytest.mark.long   # the default run has the same through the standard's own client
+                    # (test_simulation_control.py); CI's long run has this one too
 def test_rods_spawned_with_their_own_masses_deflect_as_their_closed_forms_and_go(
         ros_processes, ros_node, request):
     ns = namespace(request)
@@ -265,6 +267,7 @@ def test_spawn_pose_places_the_rod_in_the_shared_world_frame(ros_processes, ros_
         (2.0 + R0 * math.cos(yaw), -1.0 + R0 * math.sin(yaw), L), abs=1e-12)
 
 
+@pytest.mark.long   # 17 s: in CI's long run, to keep the default run under 15 minutes
 def test_a_thousand_spawns_are_each_answered_and_the_world_keeps_its_rate(
         ros_processes, ros_node, request):
     """1000 SpawnEntity requests at once against max_rods 20: 19 spawned, 981 refused

@@ -209,7 +209,7 @@ def test_a_trajectory_ends_at_its_last_point_s_speed_exactly_whatever_its_start(
     six ended 1e-14 beside it."""
     points = (TrajectoryPoint(1.5, position=0.6, velocity=0.8, acceleration=0.2),
               TrajectoryPoint(3.0, position=2.0, velocity=1.0, acceleration=0.0))
-    for offset in range(0, 400, 7):
+    for offset in range(0, 400, 19):
         world = World(1000.0)
         rod = SimulationEngine(EngineConfig(max_angular_acceleration=2.0), world=world)
         world.advance(offset)
