@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import yaml
 from geometry_msgs.msg import Vector3Stamped
-from node_probes import CONFIG, by_time, namespace, param, stamp, start_simulator
+from node_probes import CONFIG, by_time, drain, namespace, param, stamp, start_simulator
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, SetParameters
 from reference import R0, W0, K, M
@@ -230,16 +230,27 @@ def test_without_a_simulator_the_publisher_waits_for_the_rod_and_keeps_read_only
 
 
 def test_a_planned_spin_up_can_still_be_streamed(ros_processes, ros_node, request):
-    """send_as:=stream: the plan's samples on cmd/omega, at rest for the lead first."""
+    """send_as:=stream: the plan's samples on cmd/omega, at rest for the 3 s lead first
+    (samples 0 .. 300 at 100 Hz, t = 0 .. 3 s: the change starts from rest at 3 s, so its
+    first sample is 0 too), then the change up to 2 rad/s.
+
+    The publisher starts once the simulator's subscription has matched: this test's may
+    match a little later (seen: 9 samples missed), so the lead is counted as the zeros
+    received plus the samples missed (the publisher's count minus the received).
+    """
     ns = namespace(request)
     start_simulator(ros_processes, ns, 'table1.yaml', markers=False)
     got = ros_node.subscribe(f'{ns}/cmd/omega', Float64, qos=1000)
-    ros_processes.start_console_script('profile_publisher', *ros_arguments(
+    pub = ros_processes.start_console_script('profile_publisher', *ros_arguments(
         namespace=ns, params={'profile': 'planned', 'send_as': 'stream',
                               'max_angular_acceleration': 2.0}))
-    ros_node.spin_until(lambda: len(got) > 320, 60, 'the lead and the start of the change')
+    pub.wait_for_output('end: published', timeout=60)
+    published = int(re.search(r'end: published (\d+) samples', pub.output).group(1))
+    drain(ros_node, got, what='the stream')
     w = [m.data for m in got]
-    assert w[:300] == [0.0] * 300 and 0.0 < w[320] < 2.0
+    zeros = next(i for i, x in enumerate(w) if x != 0.0)
+    assert zeros > 0 and zeros + (published - len(w)) == 301
+    assert 0.0 < w[zeros] < 2.0 and w[-1] == 2.0
 
 
 @pytest.mark.long      # a robust plan through three nodes: .ci/run runs it
