@@ -452,6 +452,23 @@ class ChainWorkspace:
         return self._out[(m, rows)]
 
 
+def _blocked(phi: np.ndarray) -> tuple[np.ndarray, tuple, int, int, int, int]:
+    """The chains' blocks of B ~ sqrt(N) steps: (padded phi, leading axes, N, n, B, nb).
+
+    phi is padded with identity steps to nb x B steps: they leave every product of the
+    chain unchanged.
+    """
+    *lead_list, N, n, _ = phi.shape
+    lead = tuple(lead_list)
+    B = max(1, math.isqrt(N))
+    nb = -(-N // B)
+    pad = nb * B - N
+    if pad:
+        eye = np.broadcast_to(np.eye(n, dtype=phi.dtype), lead + (pad, n, n))
+        phi = np.concatenate([phi, eye], axis=-3)
+    return phi, lead, N, n, B, nb
+
+
 def affine_chain(phi: np.ndarray, x0: np.ndarray, *, rows=None, steps: int | None = None,
                  work: ChainWorkspace | None = None) -> np.ndarray:
     """States x_0..x_N of x_{k+1} = phi_k x_k.
@@ -475,14 +492,7 @@ def affine_chain(phi: np.ndarray, x0: np.ndarray, *, rows=None, steps: int | Non
         B, nb = work.block, work.blocks
         cum = work.cum
     else:
-        *lead_list, N, n, _ = phi.shape
-        lead = tuple(lead_list)
-        B = max(1, math.isqrt(N))
-        nb = -(-N // B)
-        pad = nb * B - N
-        if pad:
-            eye = np.broadcast_to(np.eye(n, dtype=phi.dtype), lead + (pad, n, n))
-            phi = np.concatenate([phi, eye], axis=-3)
+        phi, lead, N, n, B, nb = _blocked(phi)
         cum = np.empty(lead + (nb, B, n, n), dtype=phi.dtype)
     vector = x0.ndim == len(lead) + 1
     x = x0[..., None] if vector else x0
@@ -550,14 +560,7 @@ def adjoint_chain(phi: np.ndarray, final: np.ndarray) -> np.ndarray:
     chained backwards, and every lambda is the row of its block's end times its product
     (~2 sqrt(N) batched products instead of N).
     """
-    *lead_list, N, n, _ = phi.shape
-    lead = tuple(lead_list)
-    B = max(1, math.isqrt(N))
-    nb = -(-N // B)
-    pad = nb * B - N
-    if pad:         # identity steps after the last: they leave every product unchanged
-        eye = np.broadcast_to(np.eye(n, dtype=phi.dtype), lead + (pad, n, n))
-        phi = np.concatenate([phi, eye], axis=-3)
+    phi, lead, N, n, B, nb = _blocked(phi)
     P = phi.reshape(lead + (nb, B, n, n))
     to_end = np.empty(lead + (nb, B, n, n), dtype=phi.dtype)   # phi_end-1 ... phi_bB+j
     to_end[..., B - 1, :, :] = P[..., B - 1, :, :]
@@ -572,7 +575,6 @@ def adjoint_chain(phi: np.ndarray, final: np.ndarray) -> np.ndarray:
     lam = np.empty(lead + (nb * B + 1,) + final.shape[-2:], dtype=ends.dtype)
     np.matmul(ends[..., 1:, None, :, :], to_end,
               out=lam[..., :nb * B, :, :].reshape(lead + (nb, B) + final.shape[-2:]))
-    lam[..., nb * B, :, :] = final
     lam = lam[..., :N + 1, :, :]
     lam[..., N, :, :] = final
     return lam
@@ -590,16 +592,10 @@ def sensitivity_chain(phi: np.ndarray, forcing: np.ndarray) -> np.ndarray:
     chained, and every S follows in one batched product (~3 sqrt(N) batched products
     instead of N).
     """
-    *lead_list, N, n, _ = phi.shape
-    lead = tuple(lead_list)
+    phi, lead, N, n, B, nb = _blocked(phi)
     p = forcing.shape[-1]
-    B = max(1, math.isqrt(N))
-    nb = -(-N // B)
-    pad = nb * B - N
-    if pad:         # steps after the last: identity, no forcing
-        phi = np.concatenate([phi, np.broadcast_to(np.eye(n, dtype=phi.dtype),
-                                                   lead + (pad, n, n))], axis=-3)
-        forcing = np.concatenate([forcing, np.zeros(lead + (pad, n, p),
+    if nb * B > N:      # no forcing on the identity steps after the last
+        forcing = np.concatenate([forcing, np.zeros(lead + (nb * B - N, n, p),
                                                     dtype=forcing.dtype)], axis=-3)
     P = phi.reshape(lead + (nb, B, n, n))
     F = forcing.reshape(lead + (nb, B, n, p))
