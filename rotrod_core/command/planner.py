@@ -376,7 +376,11 @@ class _Problem:
         (:func:`_minimax_step`) from ``y0`` (first moved into the linear bounds): M is
         the value the iteration converges to, not the first iterate that happens to
         pass, so the decision M <= 1 moves with the machine's rounding only where M is
-        within the solver's tolerance of 1.
+        within the solver's tolerance of 1. The curvature of each step's QP is weighted
+        by the multipliers of the QP that led to y, plus those of every QP whose step
+        was rejected at y since: a steep ratio that only a rejected step brought up
+        then bends the next model, instead of the damping alone shrinking the step
+        (docs/planner.md compares the two).
         """
         lim = self.limits(T)
         y = self._within_bounds(lim, np.asarray(y0, dtype=float))
@@ -402,7 +406,11 @@ class _Problem:
                 if gain > 0.75:
                     damping /= 4.0
             else:
+                # y stays; the next QP's curvature adds that of the ratios the rejected
+                # step's QP found active (its multipliers: estimates at y as well)
                 damping *= 4.0
+                weights = weights + multipliers
+                weights /= max(weights.sum(), 1e-300)
         return y, float(g.max())
 
     def _bounds(self, lim: _Limits, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -897,8 +905,8 @@ def _narrow(runs: _Durations, bad: int, good: int) -> tuple[int, int]:
     Without an acceleration bound, M near the answer is nearly flat (within a few
     per cent of 1 over tens of milliseconds) and its converged value depends on the
     shape a solve starts from by more than its distance from 1 (the minimax problem
-    has local minima): reached by secant steps, Table 1's nominal plan came out 0.807
-    or 0.809 s instead of 0.808 s and a rectangular rod's 0.363 instead of 0.362 s, so
+    has local minima): reached by secant steps, Table 1's nominal plan came out 1 ms
+    either side of bisection's answer and a rectangular rod's 1 ms longer, so
     those requests keep bisection, visiting the durations they always did. With the
     bound, M rises steeply below the answer and the secant steps reached bisection's
     answer on every request tried (18: Table 1's, steel, rig, rectangular, damped and
