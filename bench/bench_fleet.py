@@ -24,7 +24,10 @@ runs (RUNS), side by side:
   message received, receive lag p99 <= 10 ms. Beside it, ``large_processes``: ``rotrod
   fleet --rods {--rods} --processes`` (the same files), its CPU per rod times
   ``--large-rods`` (a hundred processes of their own do not fit this machine's two
-  cores: ten already take most of one);
+  cores: ten already take most of one); and ``large_floor``: one process of
+  bench/publication_floor.py publishing the same world's tip/deflection topics
+  (``--rods {--large-rods} --topics tip/deflection``: what the large world publishes to
+  this subscriber, nothing else), the floor under the large world's CPU;
 - ``single`` and ``single_before``: one rod at the defaults, this process subscribed to
   its four sample topics; the simulator of this checkout and the one of ``--baseline``
   (default: the last commit before worlds), three runs each, alternating. The target:
@@ -118,7 +121,8 @@ class Run:
 
     label: str
     rods: int
-    layout: str                  # 'world', 'fleet', 'processes', 'floor'
+    layout: str         # 'world', 'fleet', 'fleet_processes', 'processes', 'floor',
+    #                     'world_floor'
     all_topics: bool = False     # subscribe to the four sample topics, not tip/deflection
     setpoints: bool = True       # one cmd/omega setpoint per rod
     env: dict = field(default_factory=dict)   # the processes' extra environment
@@ -137,6 +141,12 @@ def start_rods(run: Run, logs: Path) -> tuple[Processes, list[str]]:
         return procs, [n for n in procs.procs if n.endswith('_simulator')]
     procs = Processes(logs, ros_environment(env))
     try:
+        if run.layout == 'world_floor':
+            name = 'world_floor'
+            procs.start(name, [sys.executable, str(publication_floor.SCRIPT), '--rods',
+                               str(run.rods), '--topics', 'tip/deflection'])
+            procs.wait_for_log(name, 'ready', 120)
+            return procs, [name]
         if run.layout == 'world':
             name = 'world_simulator'
             procs.start(name, [*executable('simulator'), '--ros-args',
@@ -266,6 +276,10 @@ def runs_of(rods: int, large: int) -> dict[str, Run]:
                            '(real time, markers and estimate off)', large, 'fleet'),
         'large_processes': Run(f'rotrod fleet --rods {rods} --processes (the same files)',
                                rods, 'fleet_processes'),
+        'large_floor': Run(f'the floor of {large} rods in one process: their tip/deflection '
+                           'publications from one bare rclpy thread (bench/'
+                           'publication_floor.py --rods, nothing else)', large,
+                           'world_floor', setpoints=False),
     }
 
 
@@ -334,13 +348,14 @@ def measure(rods: int = 10, large: int = 100, duration: float = 60.0,
             target=Target('<=', 100), fmt='.0f', note=cpu_note(big),
             comparisons=(Comparison(
                 f"{per_process['label']} ({per_process['duration_s']:.0f} s run): its CPU "
-                f'per rod times {large}', scaled, cpu_note(per_process)),)),
+                f'per rod times {large}', scaled, cpu_note(per_process)),
+                *others(('large_floor',), 'cpu', cpu_note))),
         row(title, 'receive lag at the subscriber, p99, worst rod', d['receive_p99'], 'ms',
             target=Target('<=', 10), fmt='.2f', note=f"max {d['receive_max']:.1f} ms",
-            comparisons=others(('large_processes',), 'receive_p99')),
+            comparisons=others(('large_processes', 'large_floor'), 'receive_p99')),
         row(title, 'messages received, worst rod', d['received'], '% of expected',
             better='higher', target=Target('>=', 100), fmt='.2f',
-            comparisons=others(('large_processes',), 'received')),
+            comparisons=others(('large_processes', 'large_floor'), 'received')),
     ]
     cpu = {k: np.array([r['cpu_percent_rods'] for r in v]) for k, v in singles.items()}
     spread = max(float(np.ptp(c)) for c in cpu.values())

@@ -24,6 +24,8 @@ from rotrod_core.model.interface import (
 )
 from rotrod_core.model.scene import TRAIL_ID, Shape, scene
 
+from . import cdr
+
 HUB_JOINT = interface.HUB_JOINT
 """The hub's joint name in joint_states (the nodes that read it look it up by name)."""
 
@@ -136,18 +138,42 @@ def rig_estimate(monitor, estimate) -> RigEstimate:
 
 
 class SampleMessages:
-    """The messages of the sample topics, made once and written anew for each sample.
+    """The messages of the sample topics of one rod, written anew for each sample.
 
-    Setting a few fields costs much less than making the messages
-    (docs/realtime.md#node-cpu); publish one sample's messages before writing the next.
+    joint_states, tip/deflection, tip/position and frequencies as the bytes DDS sends
+    (:mod:`rotrod_ros.cdr`: their strings are the rod's for its life, so each is one
+    ``struct`` of its numbers; what :func:`joint_state`, :func:`deflection`,
+    :func:`position` and :func:`frequencies` would serialise to); the whirl estimate,
+    whose reasons are text, as a message made once and written anew (setting a few
+    fields costs much less than making it: docs/realtime.md#node-cpu).
+    Stamps are (sec, nanosec) of :func:`rotrod_core.model.interface.stamp_parts`.
     """
 
     def __init__(self, rotor_frame: str, world_frame: str) -> None:
-        self.joint_state = JointState(name=list(JOINT_NAMES))
-        self.deflection = Vector3Stamped(header=header(Time(), rotor_frame))
-        self.position = PointStamped(header=header(Time(), world_frame))
-        self.frequencies = DynamicFrequencies()
+        self._joints = cdr.JointStates(JOINT_NAMES)
+        self._rotor = cdr.StampedTriple(rotor_frame)
+        self._world = cdr.StampedTriple(world_frame)
+        self._frequencies = cdr.StampedTriple('')
         self.estimate = WhirlEstimate()
+
+    def joint_state(self, sec: int, nanosec: int, state, torque: float) -> bytes:
+        """sensor_msgs/JointState of :func:`joint_state`."""
+        return self._joints.pack(sec, nanosec, *joint_values(state, torque))
+
+    def deflection(self, sec: int, nanosec: int, u: float, v: float) -> bytes:
+        """geometry_msgs/Vector3Stamped (u, v, 0) m in the rotor frame."""
+        return self._rotor.pack(sec, nanosec, float(u), float(v), 0.0)
+
+    def position(self, sec: int, nanosec: int, xyz: Sequence[float]) -> bytes:
+        """geometry_msgs/PointStamped of the mass, m, in the world frame."""
+        return self._world.pack(sec, nanosec, float(xyz[0]), float(xyz[1]), float(xyz[2]))
+
+    def frequencies(self, sec: int, nanosec: int, omega: float, f1: float,
+                    f2: float) -> bytes:
+        """rotrod_interfaces/DynamicFrequencies of :func:`frequencies`."""
+        fields = frequency_fields(omega, f1, f2)
+        return self._frequencies.pack(sec, nanosec, fields['omega'], fields['f1'],
+                                      fields['f2'])
 
 
 def clock(t: Time) -> Clock:

@@ -17,6 +17,7 @@ import dataclasses
 import math
 from typing import NamedTuple
 
+from builtin_interfaces.msg import Time
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, String
 
@@ -25,7 +26,12 @@ from rotrod_core.estimation.whirl import WhirlEstimator
 from rotrod_core.live.engine import EngineConfig, SimulationEngine
 from rotrod_core.live.loop import RealTimeLoop, Sample
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
-from rotrod_core.model.interface import MARKER_NAMESPACE, ROTOR_FRAME, WORLD_FRAME
+from rotrod_core.model.interface import (
+    MARKER_NAMESPACE,
+    ROTOR_FRAME,
+    WORLD_FRAME,
+    stamp_parts,
+)
 from rotrod_core.model.scene import scene
 from rotrod_core.model.urdf import urdf_text
 
@@ -211,7 +217,9 @@ class RodIO:
     def publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,
                 estimator: WhirlEstimator | None) -> None:
         """Publish the rod's sample (the physics thread)."""
-        st, stamp, obs = s.state, messages.stamp(s.stamp), self.observation
+        st, obs = s.state, self.observation
+        sec, nanosec = stamp_parts(s.stamp)
+        stamp = Time(sec=sec, nanosec=nanosec)
         wait = not settings.real_time_factor       # as fast as possible: lossless
         keep_all = self.keep_all
         # who listens: at every sample as fast as possible (lossless), else every LOOK s
@@ -221,16 +229,14 @@ class RodIO:
         # and the estimate do not depend on the subscribers)
         u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
         if subscribed('joint_states'):
-            send('joint_states', messages.set_joint_state(m.joint_state, stamp, st, s.torque),
-                 wait)
+            send('joint_states', m.joint_state(sec, nanosec, st, s.torque), wait)
         if subscribed('tip/deflection'):
-            send('tip/deflection', messages.set_deflection(m.deflection, stamp, u, v), wait)
+            send('tip/deflection', m.deflection(sec, nanosec, u, v), wait)
         if subscribed('tip/position'):
             position = s.position if self.pose is ORIGIN else self.pose.place(s.position)
-            send('tip/position', messages.set_position(m.position, stamp, position), wait)
+            send('tip/position', m.position(sec, nanosec, position), wait)
         if subscribed('frequencies'):
-            send('frequencies', messages.set_frequencies(m.frequencies, stamp,
-                                                         float(st.omega), *s.frequencies),
+            send('frequencies', m.frequencies(sec, nanosec, float(st.omega), *s.frequencies),
                  wait)
         self.trajectories.feedback(stamp, s.tracking)
         if estimator is not None:

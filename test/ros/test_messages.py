@@ -3,6 +3,10 @@
 import math
 
 import pytest
+from geometry_msgs.msg import PointStamped, Vector3Stamped
+from rclpy.serialization import deserialize_message
+from rotrod_interfaces.msg import DynamicFrequencies
+from sensor_msgs.msg import JointState
 
 from rotrod_core import RodParams
 from rotrod_core.estimation.whirl import Whirl, WhirlEstimate
@@ -72,18 +76,23 @@ def test_marker_frames_updated_in_place_equal_fresh_arrays():
 
 
 def test_sample_messages_written_anew_equal_fresh_messages():
-    """The node's reused messages, written sample after sample, equal fresh ones."""
+    """The node's sample messages, written sample after sample as bytes, read back as
+    the fresh messages of the same values."""
     m = messages.SampleMessages('rod1/rotor', 'rod1/world')
     for k in range(3):
         t = messages.stamp(0.01 * k)
+        sec, nanosec = t.sec, t.nanosec
         state = State(1e-3 * k, -2e-4, 0.01, -0.02 * k, 0.5 * k, 2.0 + k)
-        assert messages.set_joint_state(m.joint_state, t, state, 0.1 * k) == \
-            messages.joint_state(t, state, 0.1 * k)
-        assert messages.set_deflection(m.deflection, t, 1e-3 * k, 2e-4) == \
+        assert deserialize_message(m.joint_state(sec, nanosec, state, 0.1 * k),
+                                   JointState) == messages.joint_state(t, state, 0.1 * k)
+        assert deserialize_message(m.deflection(sec, nanosec, 1e-3 * k, 2e-4),
+                                   Vector3Stamped) == \
             messages.deflection(t, 1e-3 * k, 2e-4, 'rod1/rotor')
-        assert messages.set_position(m.position, t, (0.1, 0.2 * k, 0.3)) == \
+        assert deserialize_message(m.position(sec, nanosec, (0.1, 0.2 * k, 0.3)),
+                                   PointStamped) == \
             messages.position(t, (0.1, 0.2 * k, 0.3), 'rod1/world')
-        assert messages.set_frequencies(m.frequencies, t, 0.5 * k, 1.5, 2.0 + k) == \
+        assert deserialize_message(m.frequencies(sec, nanosec, 0.5 * k, 1.5, 2.0 + k),
+                                   DynamicFrequencies) == \
             messages.frequencies(t, 0.5 * k, 1.5, 2.0 + k)
         e = WhirlEstimate(forward=Whirl(frequency=1.5 + k, frequency_std=1e-3), time=0.5 * k,
                           window=0.99, samples=100 + k, reason='backward: weak')
