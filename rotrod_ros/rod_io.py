@@ -215,8 +215,13 @@ class RodIO:
 
     # ----------------------------------------------------------------- publishing
     def publish(self, s: Sample, settings: NodeSettings, config: EngineConfig,
-                estimator: WhirlEstimator | None) -> None:
-        """Publish the rod's sample (the physics thread)."""
+                estimator: WhirlEstimator | None) -> tuple:
+        """Publish the rod's sample topics and trajectory feedback (the physics thread).
+
+        Returns the arguments of :meth:`publish_extras`, which the node calls once every
+        rod's samples of the instant are out: an estimate or a marker array costs many
+        samples' publications, and the rods after it would wait for it.
+        """
         st, obs = s.state, self.observation
         sec, nanosec = stamp_parts(s.stamp)
         stamp = Time(sec=sec, nanosec=nanosec)
@@ -239,6 +244,17 @@ class RodIO:
             send('frequencies', m.frequencies(sec, nanosec, float(st.omega), *s.frequencies),
                  wait)
         self.trajectories.feedback(stamp, s.tracking)
+        return s, stamp, u, v, settings, config, estimator
+
+    def publish_extras(self, s: Sample, stamp: Time, u: float, v: float,
+                       settings: NodeSettings, config: EngineConfig,
+                       estimator: WhirlEstimator | None) -> None:
+        """The sample's whirl estimate (when one is due) and markers (when due).
+
+        ``u``, ``v``: the deflection the sensor read for the sample (m).
+        """
+        wait = not settings.real_time_factor
+        send, subscribed, m = self.keep_all.send, self.keep_all.subscribed, self.messages
         if estimator is not None:
             estimate = estimator.push(s.time, u, v)
             if estimate is not None and subscribed('frequencies/estimate'):

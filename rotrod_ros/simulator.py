@@ -149,6 +149,7 @@ class SimulatorNode(Node):
         """The rods the parameters describe (the others were spawned)."""
         self._goals: dict[int, trajectory_server.TrajectoryServer] = {}
         self._clock_time: float | None = None
+        self._extras: list = []    # (rod, its sample's extras) of the instant being sent
         self.loop = RealTimeLoop(
             self.world, settings, self._publish, publish_status=self._publish_status,
             snapshot=lambda: {name: io.observation.estimator
@@ -157,7 +158,7 @@ class SimulatorNode(Node):
             inputs={'omega': 'cmd/omega or joint_command',
                     'torque': 'cmd/torque or joint_command'},
             ready=self._subscribers_ready if settings.subscriber_wait()[0] else None,
-            on_trajectory=self._on_trajectory)
+            on_trajectory=self._on_trajectory, published=self._publish_extras)
         self._wait_deadline: float | None = None
         # the sample topics' QoS is chosen once, at start: KEEP_ALL as fast as possible
         self.lossless = settings.real_time_factor == 0
@@ -367,7 +368,15 @@ class SimulatorNode(Node):
             self._io['/clock'].publish(messages.clock(messages.stamp(s.stamp)))
         io = self.rods.get(s.rod)
         if io is not None:                    # not deleted since the sample was taken
-            io.publish(s, settings, config, estimators.get(s.rod))
+            self._extras.append((io, io.publish(s, settings, config,
+                                                estimators.get(s.rod))))
+
+    def _publish_extras(self) -> None:
+        """Every rod's estimate and markers of the instant, after all its samples."""
+        extras, self._extras = self._extras, []
+        for io, args in extras:
+            if self.rods.get(io.name) is io:      # not deleted since its samples went
+                io.publish_extras(*args)
 
     def _publish_status(self, statuses: list[Status]) -> None:
         if not statuses:

@@ -243,11 +243,15 @@ class RealTimeLoop(Generic[SettingsT]):
         on_trajectory: called in the loop's thread with each
             :class:`~rotrod_core.live.execution.TrajectoryOutcome` (a trajectory goal
             refused or ended), as soon as the engine has it.
+        published: called in the same wake-up once every rod's sample of an instant was
+            handed to ``publish``: the host's second pass, for what can wait behind
+            every rod's samples (the whirl estimates, the markers).
     """
 
     def __init__(self, world: World | SimulationEngine, settings: SettingsT, publish, *,
                  publish_status=None, snapshot=None, logger=None, clock=None,
-                 running=None, inputs=None, ready=None, on_trajectory=None):
+                 running=None, inputs=None, ready=None, on_trajectory=None,
+                 published=None):
         self.world = world if isinstance(world, World) else world.world
         self.settings = settings
         self._publish = publish
@@ -259,6 +263,7 @@ class RealTimeLoop(Generic[SettingsT]):
         self._inputs = {kind: kind for kind in COMMANDS} | dict(inputs or {})
         self._ready = ready
         self._on_trajectory = on_trajectory or (lambda outcome: None)
+        self._published_hook = published or (lambda: None)
         self.lock = threading.RLock()
         """Held while the engine or the loop's state changes (re-entrant)."""
         self._stop = threading.Event()
@@ -705,6 +710,7 @@ class RealTimeLoop(Generic[SettingsT]):
         publish = self._publish
         for sample in samples:
             publish(sample, settings, configs[sample.rod], snapshot)
+        self._published_hook()
         self.publications += 1
 
     def _finish_step_requests(self, problem: str) -> None:
