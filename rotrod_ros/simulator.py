@@ -149,7 +149,7 @@ class SimulatorNode(Node):
         """The rods the parameters describe (the others were spawned)."""
         self._goals: dict[int, trajectory_server.TrajectoryServer] = {}
         self._clock_time: float | None = None
-        self._extras: list = []    # (rod, its sample's extras) of the instant being sent
+        self._extras: list[tuple[rod_io.RodIO, tuple]] = []   # (rod, its extras) this instant
         self.loop = RealTimeLoop(
             self.world, settings, self._publish, publish_status=self._publish_status,
             snapshot=lambda: {name: io.observation.estimator
