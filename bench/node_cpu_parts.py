@@ -58,35 +58,36 @@ def measure(duration: float, params: dict) -> dict:
     from rclpy.parameter import Parameter
 
     import rotrod_ros.messages as messages
+    import rotrod_ros.rod_io as rod_io
     import rotrod_ros.simulator as simulator
 
     values = dict(params)
     spent: Counter = Counter()
     calls: Counter = Counter()
-    for fn, label in (('set_joint_state', 'joint_states message'),
-                      ('set_deflection', 'tip/deflection message'),
-                      ('set_position', 'tip/position message'),
-                      ('set_frequencies', 'frequencies messages'),
-                      ('set_whirl_estimate', 'frequencies messages'),
-                      ('stamp', 'stamps')):
+    for fn, label in (('joint_state', 'joint_states message'),
+                      ('deflection', 'tip/deflection message'),
+                      ('position', 'tip/position message'),
+                      ('frequencies', 'frequencies messages')):
+        _timed(messages.SampleMessages, fn, label, spent, calls)
+    for fn, label in (('set_whirl_estimate', 'frequencies messages'), ('stamp', 'stamps')):
         _timed(messages, fn, label, spent, calls)
     for fn, label in (('rod_centerline', 'markers: rod shape'),
                       ('scene', 'markers: scene shapes')):
-        _timed(simulator, fn, label, spent, calls)
+        _timed(rod_io, fn, label, spent, calls)
     rclpy.init(args=[])
     try:
         node = simulator.SimulatorNode(parameter_overrides=[
             Parameter(k, value=v) for k, v in values.items()])
-        loop = node.loop
-        _timed(loop.engine, 'advance', 'physics steps', spent, calls)
+        loop, rod = node.loop, node.rods['']     # the simulator's one rod, as started
+        _timed(node.world, 'advance', 'physics steps', spent, calls)
         _timed(loop, 'report', 'status check and /diagnostics', spent, calls)
-        _timed(loop, '_sample', 'sample (frequencies, position)', spent, calls)
+        _timed(loop, '_samples', 'sample (frequencies, position)', spent, calls)
         _timed(loop, '_apply_commands', 'commands', spent, calls)
         _timed(loop.clock, 'sleep_until', 'waits to each due time', spent, calls)
-        _timed(node._keep_all, 'send', 'publish: sample topics', spent, calls)
-        _timed(node._marker_frames, 'frame', 'markers: message', spent, calls)
-        _timed(node._io['markers'], 'publish', 'markers: publish', spent, calls)
-        estimator = node._observation.estimator
+        _timed(rod.keep_all, 'send', 'publish: sample topics', spent, calls)
+        _timed(rod.marker_frames, 'frame', 'markers: message', spent, calls)
+        _timed(rod.io['markers'], 'publish', 'markers: publish', spent, calls)
+        estimator = rod.observation.estimator
         if estimator is not None:
             _timed(estimator, 'push', 'whirl estimate', spent, calls)
         executor = SingleThreadedExecutor()
