@@ -27,6 +27,7 @@ from rotrod_core.live.loop import (
     LoopSettings,
     RealTimeLoop,
 )
+from rotrod_core.live.world import World
 
 START = 1000.0          # fake monotonic time at which the loop is made, s
 EPOCH = 1.7e9           # fake epoch time then, s
@@ -128,6 +129,35 @@ class Run:
     @property
     def times(self):
         return [s.time for _, s in self.samples]
+
+
+def test_in_a_world_the_published_pass_follows_every_rods_sample_of_each_instant():
+    """The host's second pass (``published``: estimates, markers) runs once per instant,
+    after the sample of every rod of that instant was handed to ``publish``."""
+    world = World(1000.0)
+    for name in ('a', 'b', 'c'):
+        SimulationEngine(EngineConfig(), world=world, name=name)
+    events: list = []
+    clock = FakeClock()
+    loop = RealTimeLoop(world, LoopSettings(realtime_priority=0, cpu_dma_latency=-1),
+                        lambda s, *context: events.append((s.time, s.rod)), clock=clock,
+                        logger=Logger(), published=lambda: events.append('published'))
+    while clock.now < START + 0.2:
+        assert loop.cycle()
+    assert events and events[-1] == 'published'
+    groups: list = []
+    current: list = []
+    for e in events:
+        if e == 'published':
+            groups.append(current)
+            current = []
+        else:
+            current.append(e)
+    assert len(groups) >= 19
+    for k, group in enumerate(groups):
+        assert sorted(rod for _, rod in group) == ['a', 'b', 'c']
+        times = {t for t, _ in group}
+        assert len(times) == 1 and times.pop() == pytest.approx(0.01 * k, abs=1e-12)
 
 
 def torque_config(**kw):
