@@ -117,7 +117,8 @@ def main(argv: list[str] | None = None) -> int:
     topics = tuple(args.topics.split(','))
     if not topics or any(t not in PER_SAMPLE for t in topics):
         ap.error(f'--topics must name some of {", ".join(PER_SAMPLE)}, got {args.topics!r}')
-    prefixes = [''] if args.rods == 1 else [f'rod{k}/' for k in range(args.rods)]
+    from rotrod_ros.simulator import started_rods
+    prefixes = [prefix for _, prefix in started_rods(args.rods)]
     import rclpy
     from rclpy.node import Node
     rclpy.init(args=[])

@@ -47,13 +47,13 @@ class _Layout:
         self.format += code
         self.size += 4
 
-    def string(self, text: str) -> bytes:
+    def string(self, text: str) -> tuple[int, bytes]:
         """A fixed string: its length field and bytes, returned to be packed in place."""
         data = text.encode() + b'\x00'
         self.int32('I')
         self.format += f'{len(data)}s'
         self.size += len(data)
-        return data
+        return len(data), data
 
     def float64(self, n: int = 1) -> None:
         if not n:                # an empty sequence's elements: no alignment either
@@ -62,12 +62,11 @@ class _Layout:
         self.format += 'd' * n
         self.size += 8 * n
 
-    def header(self, frame_id: str) -> tuple:
+    def header(self, frame_id: str) -> tuple[int, bytes]:
         """std_msgs/Header: stamp (sec int32, nanosec uint32), frame_id; its constants."""
         self.int32('i')
         self.int32('I')
-        data = self.string(frame_id)
-        return len(data), data
+        return self.string(frame_id)
 
     def struct(self) -> struct.Struct:
         return struct.Struct(self.format)
@@ -106,8 +105,7 @@ class JointStates:
         layout.int32('I')
         constants.append(len(names))
         for name in names:
-            data = layout.string(name)
-            constants.extend((len(data), data))
+            constants.extend(layout.string(name))
         self._n = len(names)
         for _ in range(3):
             layout.int32('I')
