@@ -32,10 +32,11 @@ os.environ.setdefault('OPENBLAS_NUM_THREADS', '1')
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / 'bench')]
+sys.path[:0] = [str(ROOT), str(ROOT / 'bench'), str(ROOT / 'test')]
 
 import results  # noqa: E402  (bench/results.py)
 from results import Row, Target  # noqa: E402
+from sensor_records import encoder_angles, imu_xy  # noqa: E402  (test/sensor_records.py)
 
 from rotrod_core import (  # noqa: E402
     Eq26Profile,
@@ -47,7 +48,11 @@ from rotrod_core import (  # noqa: E402
     rig_cramer_rao,
     simulate,
 )
-from rotrod_core.estimation.identify import _modulating_start, _record  # noqa: E402
+from rotrod_core.estimation.identify import (  # noqa: E402
+    Accelerometer,
+    _modulating_start,
+    _record,
+)
 
 K, M, R0 = 32.37, 0.3, 0.08
 W0 = math.sqrt(K / M)
@@ -119,6 +124,51 @@ def eq26_report(seeds):
     return lines, err, std, crb
 
 
+REAL_RIG = RodParams(gravity=9.81, rod_density=7850.0)
+"""Table 1 upright under gravity with a steel rod (config/real_rig.yaml)."""
+IMU_SIGMA, IMU_BIAS = 0.02, 0.05
+"""The IMU's noise per axis and sample, m/s^2, and its bias's scale (each axis's bias is
+drawn from N(IMU_BIAS, (IMU_BIAS / 5)^2) per seed)."""
+
+
+def sensor_trials(seeds):
+    """The real rig from its deflection (40 dB) and from its IMU, 100 Hz, 10 s.
+
+    The record: RampProfile to 2 rad/s at 0.5 rad/s^2 from t = 2 s, then a hold (the
+    rig monitor's test). Per seed: the deflection with 40 dB of white noise; the IMU's
+    x, y (rotrod_core.sensors.imu) with IMU_SIGMA white noise and a bias; the same with
+    w and w' from the encoder's quantised angle (4096 counts). Returns, per source,
+    the errors (w0, r0 relative) and reported standard deviations, and the CRBs.
+    """
+    run = simulate(REAL_RIG, RampProfile(2.0, 4.0, t_start=2.0), 10.0, dt=1e-2)
+    w0, r0 = float(REAL_RIG.natural_frequency), float(REAL_RIG.load_radius)
+    y = imu_xy(REAL_RIG, run)
+    angle, _ = encoder_angles(run)
+    sensor = Accelerometer.of(REAL_RIG)
+    sigma_u = snr40(run)
+    crb = {'deflection': rig_cramer_rao(run.t, run.omega, w0, r0, 0.0, sigma_u),
+           'imu': rig_cramer_rao(run.t, run.omega, w0, r0, 0.0, IMU_SIGMA, sensor=sensor)}
+    rng = np.random.default_rng(37)
+    out: dict = {'deflection': [], 'imu': [], 'imu + encoder': []}
+    n = len(run.t)
+    for _ in range(seeds):
+        u, v = noisy(run, sigma_u, rng)
+        bias = complex(*rng.normal(IMU_BIAS, IMU_BIAS / 5, 2))
+        m = y + IMU_SIGMA * (rng.standard_normal(n) + 1j * rng.standard_normal(n)) + bias
+        hub = RigIdentifier(window=10.0, sample_interval=1e-2, hub='angle',
+                            sensor=sensor)
+        for t, x, yy, a in zip(run.t, m.real, m.imag, angle):
+            hub.push(t, x, yy, a)
+        for source, est in (
+                ('deflection', identify_rig(run.t, u, v, run.omega)),
+                ('imu', identify_rig(run.t, m.real, m.imag, run.omega, sensor=sensor)),
+                ('imu + encoder', hub.update())):
+            out[source].append([est.natural_frequency / w0 - 1, est.eccentricity / r0 - 1,
+                                est.natural_frequency_std / w0,
+                                est.eccentricity_std / r0])
+    return {k: np.array(v) for k, v in out.items()}, crb, sigma_u, (w0, r0)
+
+
 def online_cost():
     """(wall, CPU) ms per RigIdentifier update: 10 s window, 100 Hz, every 0.1 s."""
     run = simulate(RIG, PROFILE, 40.0, dt=1e-2)
@@ -171,6 +221,23 @@ def measure(seeds=50, eq26_seeds=10):
                     srms[0] / W0, 'relative', note=f'r0 {srms[1] / R0:.2g}; refined to '
                     f'{rms[0] / W0:.2g} and {rms[1] / R0:.2g}'))
     rows.append(Row(BENCH, 'offline fit, 14001 samples', 1e3 * per_fit, 'ms'))
+
+    trials, crb, sigma_u, (w0, r0) = sensor_trials(min(seeds, 20))
+    noise = {'deflection': f'40 dB (sigma {sigma_u * 1e6:.3g} um)',
+             'imu': f'{IMU_SIGMA:g} m/s^2, bias ~{IMU_BIAS:g} m/s^2',
+             'imu + encoder': f'{IMU_SIGMA:g} m/s^2, bias ~{IMU_BIAS:g}, 4096 counts'}
+    for source, a in trials.items():
+        rms = np.sqrt(np.mean(a[:, :2] ** 2, axis=0))
+        bound = crb.get(source)
+        crb_text = '' if bound is None else (
+            f'; CRB {bound["natural_frequency"] / w0:.2g}, {bound["eccentricity"] / r0:.2g}')
+        rows.append(Row(BENCH, f'real rig from the {source}: w0 RMS relative error',
+                        float(rms[0]), 'relative', Target('<=', 5e-3),
+                        note=f'{noise[source]}, {len(a)} seeds; mean {a[:, 0].mean():+.2g}; '
+                        f'reported {a[:, 2].mean():.2g}{crb_text}'))
+        rows.append(Row(BENCH, f'real rig from the {source}: r0 RMS relative error',
+                        float(rms[1]), 'relative', Target('<=', 5e-2),
+                        note=f'mean {a[:, 1].mean():+.2g}; reported {a[:, 3].mean():.2g}'))
 
     lines, _, _, _ = eq26_report(eq26_seeds)
     costs, z = online_cost()

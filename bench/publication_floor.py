@@ -71,7 +71,7 @@ def messages(prefix: str = '', topics=PER_SAMPLE) -> list:
     from rotrod_ros import messages as m
     sample = m.SampleMessages(prefix + ROTOR_FRAME, WORLD_FRAME)
     state = State(theta=0.1, omega=2.0, u=1e-3, v=1e-4, du=0.0, dv=0.0)
-    writers = {'joint_states': lambda s, ns: sample.joint_state(s, ns, state, 0.0),
+    writers = {'joint_states': lambda s, ns: sample.joint_state(s, ns, state, 0.0, 0.3),
                'tip/deflection': lambda s, ns: sample.deflection(s, ns, 1e-3, 1e-4),
                'tip/position': lambda s, ns: sample.position(s, ns, (0.1, 0.0, 0.5)),
                'frequencies': lambda s, ns: sample.frequencies(s, ns, 2.0, 1.9, 2.1)}

@@ -31,12 +31,18 @@ class KeepAllPublishing:
             go on for ``stop_grace`` wall seconds in all, so that the sample being
             published when the source is stopped is published whole, then end.
         stop_grace: see ``running``, s.
+        phase: where in the period of :meth:`look` this publisher's looks fall, as a
+            fraction of it in [0, 1): the rods of a world look at different instants
+            (a hundred rods' looks together cost a publication ~3 ms).
     """
 
     def __init__(self, publishers: Mapping[str, Publisher], logger: RcutilsLogger,
                  ok: Callable[[], bool], running: Callable[[], bool],
-                 stop_grace: float = 0.0) -> None:
+                 stop_grace: float = 0.0, phase: float = 0.0) -> None:
+        if not 0.0 <= phase < 1.0:
+            raise ValueError(f'phase must be in [0, 1), got {phase!r}')
         self._publishers = publishers
+        self._phase = phase
         self._logger = logger
         self._ok = ok
         self._running = running
@@ -92,12 +98,14 @@ class KeepAllPublishing:
         """Read the subscriber counts of ``names`` if ``every`` wall seconds went by.
 
         ``every`` 0: now. Reading one costs ~2 us; a subscriber that
-        matches meanwhile gets the publications from the next look on.
+        matches meanwhile gets the publications from the next look on. The first look
+        is at once, the second ``phase`` of a period late, so that publishers made
+        together look apart.
         """
         now = time.monotonic()
         if every and now < self._next_look:
             return
-        self._next_look = now + every
+        self._next_look = now + every * (1.0 + (self._phase if not self._subscribed else 0.0))
         self._subscribed = {n: self._publishers[n].get_subscription_count() > 0
                             for n in names}
 

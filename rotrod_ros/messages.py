@@ -7,10 +7,10 @@ from collections.abc import Iterable, Sequence
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
+from geometry_msgs.msg import Point, PointStamped, Vector3Stamped, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from rotrod_interfaces.msg import DynamicFrequencies, RigEstimate, WhirlEstimate
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -52,19 +52,22 @@ def header(t: Time, frame_id: str = '') -> Header:
     return Header(stamp=t, frame_id=frame_id)
 
 
-def joint_state(t: Time, state, torque: float) -> JointState:
+def joint_state(t: Time, state, torque: float, rod_length: float) -> JointState:
     """The joints of the URDF (:data:`JOINT_NAMES`) for a state; ``torque`` in N m.
 
     hub: theta rad, w rad/s, hub torque N m; tip_radial, tip_tangential: u, v m and
-    u', v' m/s, effort 0 (passive). See :func:`rotrod_core.model.interface.joint_values`.
+    u', v' m/s; tip_pitch, tip_roll: the tip's tilt a, -b rad and their rates (for a rod
+    of ``rod_length`` m); the tip joints' effort 0 (passive). See
+    :func:`rotrod_core.model.interface.joint_values`.
     """
-    return set_joint_state(JointState(name=list(JOINT_NAMES)), t, state, torque)
+    return set_joint_state(JointState(name=list(JOINT_NAMES)), t, state, torque, rod_length)
 
 
-def set_joint_state(msg: JointState, t: Time, state, torque: float) -> JointState:
+def set_joint_state(msg: JointState, t: Time, state, torque: float,
+                    rod_length: float) -> JointState:
     """:func:`joint_state` written into ``msg`` (made with ``name`` :data:`JOINT_NAMES`)."""
     msg.header.stamp = t
-    msg.position, msg.velocity, msg.effort = joint_values(state, torque)
+    msg.position, msg.velocity, msg.effort = joint_values(state, torque, rod_length)
     return msg
 
 
@@ -156,9 +159,10 @@ class SampleMessages:
         self._frequencies = cdr.StampedTriple('')
         self.estimate = WhirlEstimate()
 
-    def joint_state(self, sec: int, nanosec: int, state, torque: float) -> bytes:
+    def joint_state(self, sec: int, nanosec: int, state, torque: float,
+                    rod_length: float) -> bytes:
         """sensor_msgs/JointState of :func:`joint_state`."""
-        return self._joints.pack(sec, nanosec, *joint_values(state, torque))
+        return self._joints.pack(sec, nanosec, *joint_values(state, torque, rod_length))
 
     def deflection(self, sec: int, nanosec: int, u: float, v: float) -> bytes:
         """geometry_msgs/Vector3Stamped (u, v, 0) m in the rotor frame."""
@@ -176,16 +180,92 @@ class SampleMessages:
                                       fields['f2'])
 
 
+def channel_variance(noise) -> float:
+    """The variance a channel's noise adds about its bias (NoiseParams), units^2.
+
+    The white noise's, the dynamic bias's stationary one and the rounding's (precision^2
+    / 12); the run's constant bias and mean are not in it.
+    """
+    return noise.stddev ** 2 + noise.dynamic_bias_std ** 2 + noise.precision ** 2 / 12.0
+
+
+class RigMessages:
+    """The rig sensors' messages of one rod: tip/imu, hub/encoder, rod/strain.
+
+    Each is made once and written anew for each sample.
+
+    Args:
+        tip_frame: the IMU's frame (``<prefix>tip``).
+        root_frame: the strain bridge's (``<prefix>rod_root``).
+        sensors: the sensors' settings (SensorConfig): the covariances, whether the
+            orientation is given.
+    """
+
+    def __init__(self, tip_frame: str, root_frame: str, sensors) -> None:
+        self.imu = Imu()
+        self.imu.header.frame_id = tip_frame
+        self.encoder = JointState(name=[HUB_JOINT], position=[0.0], velocity=[0.0])
+        self.strain = WrenchStamped()
+        self.strain.header.frame_id = root_frame
+        self.configure(sensors)
+
+    def configure(self, sensors) -> None:
+        """Covariances and the orientation's presence for ``sensors`` (SensorConfig)."""
+        imu = self.imu
+        imu.orientation_covariance = [0.0] * 9 if sensors.orientation else [-1.0] + [0.0] * 8
+        if not sensors.orientation:
+            imu.orientation.x = imu.orientation.y = imu.orientation.z = 0.0
+            imu.orientation.w = 1.0
+        for name in ('linear_acceleration', 'angular_velocity'):
+            variance = channel_variance(getattr(sensors, name))
+            setattr(imu, f'{name}_covariance', [variance, 0.0, 0.0, 0.0, variance, 0.0,
+                                                0.0, 0.0, variance])
+        self.orientation = sensors.orientation
+
+    def imu_message(self, sec: int, nanosec: int, reading) -> Imu:
+        """sensor_msgs/Imu of an ImuReading (REP 145), in the tip's frame."""
+        msg = self.imu
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        if self.orientation:
+            q = msg.orientation
+            q.x, q.y, q.z, q.w = reading.orientation
+        a, g = msg.linear_acceleration, msg.angular_velocity
+        a.x, a.y, a.z = reading.linear_acceleration
+        g.x, g.y, g.z = reading.angular_velocity
+        return msg
+
+    def encoder_message(self, sec: int, nanosec: int, reading) -> JointState:
+        """sensor_msgs/JointState of joint 'hub': the counts' angle rad, their speed rad/s."""
+        msg = self.encoder
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        msg.position[0] = reading.angle
+        msg.velocity[0] = reading.speed
+        return msg
+
+    def strain_message(self, sec: int, nanosec: int, wrench) -> WrenchStamped:
+        """geometry_msgs/WrenchStamped of a RootWrench, N and N m, in the root's frame."""
+        msg = self.strain
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        f, m = msg.wrench.force, msg.wrench.torque
+        f.x, f.y, f.z = wrench.force
+        m.x, m.y, m.z = wrench.torque
+        return msg
+
+
 def clock(t: Time) -> Clock:
     """rosgraph_msgs/Clock."""
     return Clock(clock=t)
 
 
+def value_text(value) -> str:
+    """A diagnostic value as its KeyValue's text: a float to 6 digits, else str()."""
+    return f'{value:.6g}' if isinstance(value, float) else str(value)
+
+
 def diagnostic_status(name: str, hardware_id: str, level: int, message: str,
                       values: Iterable[tuple]) -> DiagnosticStatus:
-    """A DiagnosticStatus; values are written as text (floats to 6 digits)."""
-    kv = [KeyValue(key=str(k), value=f'{v:.6g}' if isinstance(v, float) else str(v))
-          for k, v in values]
+    """A DiagnosticStatus; values are written as text (:func:`value_text`)."""
+    kv = [KeyValue(key=str(k), value=value_text(v)) for k, v in values]
     return DiagnosticStatus(level=bytes([level]), name=name, message=message,
                             hardware_id=hardware_id, values=kv)
 

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotrod_core.estimation.whirl import WhirlEstimator, stream_estimator
+from rotrod_core.sensors.rig import RigSensors
 
 from .parameters import NodeSettings
 
@@ -32,19 +33,24 @@ def whirl_estimator(settings: NodeSettings, stagger: int = 0) -> WhirlEstimator 
 class Observation:
     """The sensor noise, whirl estimator and marker trail of the node's samples."""
 
-    def __init__(self, settings: NodeSettings, stagger: int = 0) -> None:
+    def __init__(self, settings: NodeSettings, stagger: int = 0, name: str = '') -> None:
         self.stagger = stagger
+        self.name = name
         """The rod's place in its world: when its estimates fall (:func:`whirl_estimator`)."""
         self.estimator = whirl_estimator(settings, stagger)
         """Pushed the published (u, v); replaced, not reset in place (see :meth:`reset`)."""
         self._noise = np.random.default_rng(settings.noise_seed)
         self._trail: deque[tuple[float, ...]] = deque(
             maxlen=max(1, settings.marker_trail_length))
+        self.sensors = RigSensors(settings.sensors, settings.noise_seed, name)
+        """The rig's sensors (tip/imu, hub/encoder, rod/strain), their noise seeded by
+        noise_seed and the rod's name."""
 
     def reconfigure(self, old: NodeSettings, new: NodeSettings) -> None:
         """Follow a change of settings from ``old`` to ``new``.
 
-        A new estimator for a new window or rate, a new noise sequence for a new seed,
+        A new estimator for a new window or rate, a new noise sequence for a new seed
+        (the rig sensors anew for new settings of theirs or a new seed),
         the trail kept (its newest points) at a new length.
         """
         if (new.estimate_window, new.estimate_rate, new.publish_rate) != (
@@ -52,6 +58,8 @@ class Observation:
             self.estimator = whirl_estimator(new, self.stagger)
         if new.noise_seed != old.noise_seed:
             self._noise = np.random.default_rng(new.noise_seed)
+        if (new.sensors, new.noise_seed) != (old.sensors, old.noise_seed):
+            self.sensors = RigSensors(new.sensors, new.noise_seed, self.name)
         if new.marker_trail_length != old.marker_trail_length:
             self._trail = deque(self._trail, maxlen=max(1, new.marker_trail_length))
 
@@ -67,6 +75,7 @@ class Observation:
         self.estimator = whirl_estimator(settings, self.stagger)
         if noise:
             self._noise = np.random.default_rng(settings.noise_seed)
+        self.sensors.reset(noise)
 
     def deflection(self, u: float, v: float, noise: float) -> tuple[float, float]:
         """The tip deflection (u, v) as the sensor reads it, m.

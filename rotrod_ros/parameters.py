@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from rotrod_core.live.engine import DRIVES, EngineConfig
@@ -24,6 +24,8 @@ from rotrod_core.live.publication import PublicationSettings
 from rotrod_core.live.scheduling import MAX_CPU_LATENCY, MAX_PRIORITY
 from rotrod_core.model.equations import COUPLINGS, STATE_FIELDS
 from rotrod_core.model.params import FIELDS, FieldInfo, RodParams
+from rotrod_core.sensors.noise import NOISE_TYPES, NoiseParams
+from rotrod_core.sensors.rig import SensorConfig
 
 from .parameter_specs import Spec, check_value, descriptor
 
@@ -71,6 +73,8 @@ class NodeSettings(PublicationSettings):
     rods: int = 1
     max_rods: int = 128
     max_steps_per_request: int = 1_000_000_000
+    sensors: SensorConfig = field(default_factory=SensorConfig)
+    """The rig sensors' (tip/imu, hub/encoder, rod/strain): SENSOR_SPECS."""
 
     def subscriber_wait(self) -> tuple[int, float]:
         """Subscriptions wanted on each sample topic before simulated time starts.
@@ -92,8 +96,10 @@ _NODE = NodeSettings()
 
 ENGINE_SPECS = (
     Spec('drive', _ENGINE.drive,
-         'active input: velocity (cmd/omega setpoints, rad/s) | torque (cmd/torque, N m; '
-         'the rotation is free)', choices=DRIVES),
+         'active input: velocity (cmd/omega setpoints, rad/s; an ideal drive imposes w) | '
+         'torque (cmd/torque, N m; the rotation is free) | servo (cmd/omega setpoints and '
+         'trajectories followed by a PI speed loop with the torque limit max_torque, the '
+         "rod's reaction disturbing it)", choices=DRIVES),
     Spec('coupling', _ENGINE.coupling,
          'hub torque equation: exact (Lagrangian, conserves angular momentum) | paper '
          '(Eq. 23 + J w\')', choices=COUPLINGS),
@@ -105,8 +111,20 @@ ENGINE_SPECS = (
     Spec('max_omega', _ENGINE.max_omega,
          'largest |w| accepted on cmd/omega, and reached in torque drive before the '
          'simulation halts (> 0)', 'rad/s', 0.0, 1e6),
-    Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque (> 0)',
-         'N m', 0.0, 1e9),
+    Spec('max_torque', _ENGINE.max_torque, 'largest |Q| accepted on cmd/torque, and the '
+         "servo drive's torque limit (> 0)", 'N m', 0.0, 1e9),
+    Spec('servo_bandwidth', _ENGINE.servo_bandwidth, "drive servo: the PI speed loop's "
+         'closed-loop natural frequency for a rigid hub (gains Kp = 2 servo_damping w_n J, '
+         'Ki = w_n^2 J, w_n = 2 pi servo_bandwidth, J the rigid inertia of hub, rod and '
+         'mass); > 0 and at most physics_rate / 2 (docs/sensors.md#drive)', 'Hz', 0.0, 1e6),
+    Spec('servo_damping', _ENGINE.servo_damping, "drive servo: the closed loop's damping "
+         'ratio (> 0; 1: 13.5 % overshoot of a step)', '1', 0.0, 100.0),
+    Spec('bearing_viscous_friction', _ENGINE.bearing_viscous_friction, 'the hub bearing\'s '
+         'viscous friction torque per angular velocity, on the hub in torque and servo '
+         'drive (the velocity drive\'s torque overcomes it)', 'N m s/rad', 0.0, 1e6),
+    Spec('bearing_coulomb_friction', _ENGINE.bearing_coulomb_friction, "the hub bearing's "
+         'Coulomb friction torque (with stiction at rest), on the hub in torque and servo '
+         "drive (the velocity drive's torque overcomes it)", 'N m', 0.0, 1e6),
     Spec('deflection_limit', _ENGINE.deflection_limit,
          'the critical deflection (the paper\'s 3 mm criterion, > 0): while the tip '
          'deflection sqrt(u^2 + v^2) is beyond it, diagnostics are ERROR ("beyond the '
@@ -215,7 +233,66 @@ NODE_SPECS = (
          'sleep to the due time', 's', 0.0, MAX_PUBLICATION_SPIN),
 )
 
-ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS
+NOISE_GROUPS = {'imu.linear_acceleration': ('linear_acceleration', 'm/s^2'),
+                'imu.angular_velocity': ('angular_velocity', 'rad/s'),
+                'strain': ('strain', 'N m')}
+"""The noise parameters' groups: SensorConfig's field and the channel's unit."""
+NOISE_FIELDS = {
+    'type': ('SDF <noise> type: none | gaussian | gaussian_quantized (then rounded to '
+             'precision)', ''),
+    'mean': ('added to every sample', None),
+    'stddev': ('standard deviation of the white Gaussian noise, each sample', None),
+    'bias_mean': ('mean of the bias drawn once per run (its sign then drawn, as '
+                  'gz-sensors does)', None),
+    'bias_stddev': ('standard deviation of the bias drawn once per run', None),
+    'dynamic_bias_stddev': ('driving density sigma of the dynamic bias, a first-order '
+                            'Gauss-Markov process (stationary std sigma sqrt(tau / 2)); '
+                            '0 = none', '/sqrt(s)'),
+    'dynamic_bias_correlation_time': ('correlation time tau of the dynamic bias (> 0 with '
+                                      'a dynamic bias)', 's'),
+    'precision': ('resolution the output is rounded to (gaussian_quantized; > 0 there)',
+                  None),
+}
+"""Each channel's noise parameters (SDF's <noise>): description, unit (None: the
+channel's; '/sqrt(s)': the channel's per square root of a second)."""
+_NOISE = NoiseParams()
+_SENSORS = SensorConfig()
+
+
+def _noise_specs() -> tuple[Spec, ...]:
+    specs = []
+    for group, (_, unit) in NOISE_GROUPS.items():
+        for name, (text, own) in NOISE_FIELDS.items():
+            full = f'{group}.{name}'
+            if name == 'type':
+                specs.append(Spec(full, _NOISE.type, text, choices=NOISE_TYPES))
+                continue
+            shown = unit if own is None else (f'{unit}/sqrt(s)' if own == '/sqrt(s)' else own)
+            low = -1e9 if name in ('mean', 'bias_mean') else 0.0
+            specs.append(Spec(full, float(getattr(_NOISE, name)), text, shown, low, 1e9))
+    return tuple(specs)
+
+
+SENSOR_SPECS = (
+    *_noise_specs(),
+    Spec('imu.orientation', _SENSORS.orientation, 'whether tip/imu gives the orientation '
+         '(false: a 6-axis IMU, orientation_covariance[0] = -1 as REP 145 marks it not '
+         'provided)'),
+    Spec('imu_rate', _SENSORS.imu_rate, 'rate of tip/imu, of simulated time (<= '
+         'publish_rate): it reads at the first sample within half a sample of each k / '
+         'imu_rate, so a rate that does not divide publish_rate keeps its mean (as Gazebo '
+         'updates a sensor at the step nearest its time); its noise steps by 1 / imu_rate. '
+         '0 (default) = publish_rate', 'Hz', 0.0, 1e4),
+    Spec('encoder.counts_per_revolution', _SENSORS.counts_per_revolution,
+         "hub/encoder's counts per turn: its position is a whole number of 2 pi / this",
+         '', 1, 2**31 - 1),
+    Spec('encoder.window', _SENSORS.encoder_window, "time hub/encoder's speed is taken "
+         'over (the counts gained over it, times 2 pi / counts_per_revolution, over the '
+         'time they took), of simulated time (> 0)', 's', 0.0, 60.0),
+)
+"""The rig sensors' parameters (:class:`SensorConfig`); the noise seed is noise_seed."""
+
+ALL_SPECS = ROD_SPECS + ENGINE_SPECS + NODE_SPECS + SENSOR_SPECS
 SPECS_BY_NAME = {s.name: s for s in ALL_SPECS}
 
 
@@ -242,13 +319,34 @@ def build_settings(values: Mapping[str, Any]) -> tuple[EngineConfig, NodeSetting
     engine = EngineConfig(params=params, initial=initial,
                           **{s.name: values[s.name] for s in ENGINE_SPECS
                              if not s.name.startswith('initial.')})
-    node = NodeSettings(**{f.name: values[f.name] for f in fields(NodeSettings)})
+    node = NodeSettings(**{f.name: values[f.name] for f in fields(NodeSettings)
+                           if f.name != 'sensors'}, sensors=sensor_config(values))
     if node.publish_rate > engine.physics_rate:
         raise ValueError(f'publish_rate {node.publish_rate:g} Hz exceeds physics_rate '
                          f'{engine.physics_rate:g} Hz: there would be nothing new to publish')
+    if node.sensors.imu_rate > node.publish_rate:
+        raise ValueError(f'imu_rate {node.sensors.imu_rate:g} Hz exceeds publish_rate '
+                         f'{node.publish_rate:g} Hz: the IMU reads at the samples (raise '
+                         'publish_rate for a faster IMU)')
     if node.rods > node.max_rods:
         raise ValueError(f'rods {node.rods} exceeds max_rods {node.max_rods}')
     return engine, node
+
+
+def sensor_config(values: Mapping[str, Any]) -> SensorConfig:
+    """The SensorConfig of the SENSOR_SPECS values; ValueError naming the parameter."""
+    noise = {}
+    for group, (attribute, _) in NOISE_GROUPS.items():
+        try:
+            noise[attribute] = NoiseParams(**{name: values[f'{group}.{name}']
+                                              for name in NOISE_FIELDS})
+        except ValueError as exc:
+            raise ValueError(f'{group}: {exc}') from None
+    if not values['encoder.window'] > 0:
+        raise ValueError(f'encoder.window must be > 0 s, got {values["encoder.window"]!r}')
+    return SensorConfig(**noise, counts_per_revolution=values['encoder.counts_per_revolution'],
+                        encoder_window=values['encoder.window'],
+                        orientation=values['imu.orientation'], imu_rate=values['imu_rate'])
 
 
 def defaults() -> dict[str, Any]:

@@ -313,7 +313,14 @@ class ProfilePublisher(Node):
             self.server.tick(now)
 
     def _stream_due(self, now: float) -> None:
-        """Publish the samples due at ``now`` (node clock, s), in order, none skipped."""
+        """Publish the samples due at ``now`` (node clock, s), in order, none skipped.
+
+        Sample k is due k periods after the timer tick that started the stream: on the
+        timer's grid, so each tick sends its own sample (a start between ticks, at the
+        callback's ``now``, would hold a sample back to the next tick whenever a callback
+        ran earlier in its period than the first one did: a period of jitter, and under
+        ``use_sim_time`` a sample not sent until the clock passes the next tick).
+        """
         if self._start is None:
             if self._pub.get_subscription_count() == 0:
                 if not self._waiting_logged:
@@ -326,30 +333,43 @@ class ProfilePublisher(Node):
                 self._matched_at = time.monotonic()
             if time.monotonic() - self._matched_at < MATCH_SETTLE:
                 return
-            self._start = now
+            self._start = self._tick_time(now)
             self.get_logger().info(
                 f'start: streaming {self.name} {self.profile!r} on {self._pub.topic_name} at '
                 f'{self.rate:g} Hz for {self.duration:g} s')
         due = math.floor((now - self._start) * self.rate + 1e-6)
-        end = self.samples
         # every sample in order, none skipped: a late timer sends the missed ones now
         for k in range(self._last_k + 1, due + 1):
-            t = min(k, end) / self.rate
-            assert self.profile is not None
-            self.last_setpoint = float(self.profile.omega(t))
-            self._pub.publish(Float64(data=self.last_setpoint))
-            self.published += 1
-            self._last_k = k
-            if k >= end and not self.hold:
-                if self.loop:
-                    self._start += (end + 1) / self.rate
-                    self._last_k = -1
-                    self.get_logger().info('end of the profile: starting over (loop)')
-                else:
-                    self.done = True
-                    self.get_logger().info(f'end: published {self.published} samples over '
-                                           f'{self.duration:g} s')
+            if self._publish_sample(k):
                 return
+
+    def _tick_time(self, now: float) -> float:
+        """The node-clock time (s) of the timer tick being run at ``now`` (s)."""
+        until = self._timer.time_until_next_call()       # ns to the next tick
+        if until is None or until < 0:
+            return now
+        return now + until * 1e-9 - 1.0 / self.rate
+
+    def _publish_sample(self, k: int) -> bool:
+        """Publish sample ``k`` (w at k / rate); True when it ends a pass."""
+        end = self.samples
+        assert self.profile is not None
+        self.last_setpoint = float(self.profile.omega(min(k, end) / self.rate))
+        self._pub.publish(Float64(data=self.last_setpoint))
+        self.published += 1
+        self._last_k = k
+        if k < end or self.hold:
+            return False
+        if self.loop:
+            assert self._start is not None
+            self._start += (end + 1) / self.rate
+            self._last_k = -1
+            self.get_logger().info('end of the profile: starting over (loop)')
+        else:
+            self.done = True
+            self.get_logger().info(f'end: published {self.published} samples over '
+                                   f'{self.duration:g} s')
+        return True
 
     def schedule(self) -> None:
         """Run the calling (executor) thread at ``realtime_priority``, or say why not.

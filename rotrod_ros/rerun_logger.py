@@ -44,7 +44,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rotrod_interfaces.msg import DynamicFrequencies, WhirlEstimate
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 
 from rotrod_core.model.geometry import sphere_radius
 from rotrod_core.reporting.recording import RecordingWriter
@@ -112,6 +112,8 @@ SAMPLES = (   # in the order a simulator's tick publishes them (see _take_pendin
                    QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies', DynamicFrequencies, 'f1, f2 Hz at the current w, at '
                    'their stamp', QOS_DEPTH, ALWAYS),
+    interfaces.sub('tip/imu', Imu, "the tip IMU's specific force m/s^2 and angular velocity "
+                   "rad/s in its frame (docs/sensors.md)", QOS_DEPTH, ALWAYS),
     interfaces.sub('frequencies/estimate', WhirlEstimate, 'f1, f2 Hz estimated from the '
                    "motion (NaN where not valid), at their stamp: the window's middle",
                    QOS_DEPTH, ALWAYS),
@@ -119,7 +121,7 @@ SAMPLES = (   # in the order a simulator's tick publishes them (see _take_pendin
                    'halt (and its clearing) is an entry in the recording\'s events', QOS_DEPTH),
 )
 INTERFACES = (*SAMPLES, rod_source.interface('the rod the recording draws'))
-EVERY_TICK = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies')
+EVERY_TICK = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies', 'tip/imu')
 """The topics a simulator publishes at every tick (the others now and then)."""
 SIMULATOR = 'rotrod_simulator'
 """The node name whose diagnostics the logger follows (in the logger's namespace)."""
@@ -158,7 +160,7 @@ class RerunLogger(Node):
         self._joints: tuple = ((), None)    # (names, indices of hub, tip_radial, tip_tangential)
         self._height_checked = False
         handlers = {'joint_states': self._on_joint, 'tip/deflection': self._on_deflection,
-                    'tip/position': self._on_position,
+                    'tip/position': self._on_position, 'tip/imu': self._on_imu,
                     'frequencies': lambda m, info: self._on_frequencies(m, info, False),
                     'frequencies/estimate': lambda m, info: self._on_frequencies(m, info,
                                                                                  True),
@@ -238,7 +240,7 @@ class RerunLogger(Node):
                                            else None,
                                            pretrigger=values['pretrigger'] if on_motion
                                            else None, mechanism=self.mechanism,
-                                           footer=values['footer'])
+                                           footer=values['footer'], imu=True)
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
         except Exception as exc:  # rerun raises several kinds for a bad path or port
@@ -299,6 +301,10 @@ class RerunLogger(Node):
                     f'the mass is at height {p.z:g} m, the rod_length given to the logger '
                     f'is {length:g} m: the 3D scene draws another rod than the simulator\'s '
                     '(give the logger the simulator\'s rod parameters)')
+
+    def _on_imu(self, msg: Imu, info) -> None:
+        a, w = msg.linear_acceleration, msg.angular_velocity
+        self.writer.add_imu(to_seconds(msg.header.stamp), (a.x, a.y, a.z), (w.x, w.y, w.z))
 
     def _on_diagnostics(self, msg: DiagnosticArray, info) -> None:
         for status in msg.status:

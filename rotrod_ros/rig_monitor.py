@@ -2,8 +2,11 @@
 
 Node ``rotrod_rig_monitor``: topics below (INTERFACES), parameters after them, all set
 at start; docs/nodes.md lists the same. Relative names, so ``--ros-args -r
-__ns:=/rod1`` watches the rod in /rod1, simulated or real. Samples of joint_states and
-tip/deflection are paired on their header stamps (both topics at the same instants).
+__ns:=/rod1`` watches the rod in /rod1, simulated or real. The tip is measured by
+tip/deflection or, with ``tip_sensor: imu``, by the IMU on the tip mass (tip/imu's
+horizontal specific force); the hub by joint_states' velocity or, with ``hub_sensor:
+encoder``, by hub/encoder's angle. Samples are paired on their header stamps (the
+topics at the same instants).
 The nominal rig is the simulator's rod, read from its ``robot_description``
 (:mod:`rotrod_ros.rod_source`; a rod parameter given here overrides that field, with a
 warning naming it): the monitor starts identifying once it has it. The identification
@@ -19,7 +22,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rotrod_interfaces.msg import RigEstimate
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 
 from rotrod_core.estimation.monitor import MonitorConfig, RigMonitor
 from rotrod_core.model.params import RodParams
@@ -45,19 +48,40 @@ MONITOR_SPECS = (
          'identified critical speed', '1', 0.0, 0.99),
     Spec('stiffness_tolerance', 0.05, 'WARN when the identified stiffness is off the '
          'nominal one by more than this fraction', '1', 0.0, 0.99),
+    Spec('tip_sensor', 'deflection', "what measures the tip: deflection (tip/deflection's "
+         "(u, v), m) | imu (tip/imu's linear acceleration x, y, m/s^2: a real rig's "
+         "accelerometer, its tilt and radius from the nominal rig's gravity, rod length "
+         'and masses; a constant bias is fitted)', choices=('deflection', 'imu')),
+    Spec('hub_sensor', 'joint_states', "what measures the hub: joint_states (its 'hub' "
+         "velocity, rad/s) | encoder (hub/encoder's angle, rad: w and w' from a quadratic "
+         'fit over angle_smoothing; evenly spaced samples)',
+         choices=('joint_states', 'encoder')),
+    Spec('angle_smoothing', 0.2, "span of the fit of w and w' to the encoder's angle "
+         '(hub_sensor encoder; at least 5 samples)', 's', 1e-4, 10.0),
 )
 ALL_SPECS = ROD_SPECS + MONITOR_SPECS
 READ_ONLY = True
 """The monitor's parameters are set at start only."""
 
+TOPIC_CHOICES = {'tip_sensor': {'deflection': 'tip/deflection', 'imu': 'tip/imu'},
+                 'hub_sensor': {'joint_states': 'joint_states', 'encoder': 'hub/encoder'}}
+"""The topic each choice of tip_sensor and hub_sensor subscribes to (the others' are
+not subscribed)."""
+
 INTERFACES = (
-    sub('joint_states', JointState, "joint 'hub': velocity w, rad/s", QOS_DEPTH),
-    sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame', QOS_DEPTH),
+    sub('joint_states', JointState, "joint 'hub': velocity w, rad/s (hub_sensor "
+        'joint_states)', QOS_DEPTH),
+    sub('hub/encoder', JointState, "joint 'hub': the encoder's angle, rad, and speed, "
+        'rad/s (hub_sensor encoder)', QOS_DEPTH),
+    sub('tip/deflection', Vector3Stamped, '(u, v) m in the rotating frame (tip_sensor '
+        'deflection)', QOS_DEPTH),
+    sub('tip/imu', Imu, 'linear_acceleration x, y, m/s^2, in the tip frame (tip_sensor '
+        'imu)', QOS_DEPTH),
     pub('rig/estimate', RigEstimate, 'every identification (update_rate Hz of the '
         "samples' time), stamped at the window's last sample: w0 rad/s, r0 m, zeta and "
         'their standard deviations, the quasi-static and sudden-start critical speeds for '
         'deflection_limit rad/s, the tip stiffness w0^2 M N/m and its relative deviation '
-        'from the nominal one, the residual m, the window s'),
+        'from the nominal one, the residual m (m/s^2 from the IMU), the window s'),
     pub('/diagnostics', DiagnosticArray, 'WARN near the identified critical speed '
         '(critical_margin), with the stiffness off its nominal value '
         '(stiffness_tolerance), and before the first estimate (with why)'),
@@ -73,15 +97,18 @@ class RigMonitorNode(Node):
         values = parameter_specs.declare(self, ALL_SPECS, read_only=READ_ONLY)
         self._values = values
         try:        # the monitor's own settings, checked now on Table 1's rod
-            self._config(RodParams(), values['deflection_limit'])
+            RigMonitor(self._config(RodParams(), values['deflection_limit']))
         except ValueError as exc:
             raise ConfigurationError(str(exc)) from None
         self.monitor: RigMonitor | None = None
         self._last_level = None
         self._status_name = f'{self.get_fully_qualified_name()}: rig'
-        io = interfaces.create(self, [i for i in INTERFACES if i.name != rod_source.TOPIC],
-                               {'joint_states': self._on_joint,
-                                'tip/deflection': self._on_deflection})
+        topics = [choices[values[name]] for name, choices in TOPIC_CHOICES.items()]
+        callbacks = {'joint_states': self._on_joint, 'hub/encoder': self._on_joint,
+                     'tip/deflection': self._on_deflection, 'tip/imu': self._on_imu}
+        io = interfaces.create(self, [i for i in INTERFACES if i.name in topics
+                                      or i.kind != interfaces.SUBSCRIPTION],
+                               {topic: callbacks[topic] for topic in topics})
         self._pub_estimate, self._pub_diagnostics = io['rig/estimate'], io['/diagnostics']
         self.create_timer(1.0, lambda: self._diagnose(force=True))
         self.rod = rod_source.RodSource(self, [s.name for s in ROD_SPECS] + ['deflection_limit'],
@@ -94,7 +121,10 @@ class RigMonitorNode(Node):
             sample_interval=values['sample_interval'],
             update_interval=1.0 / values['update_rate'], deflection_limit=deflection_limit,
             critical_margin=values['critical_margin'],
-            stiffness_tolerance=values['stiffness_tolerance'])
+            stiffness_tolerance=values['stiffness_tolerance'],
+            measurement='acceleration' if values['tip_sensor'] == 'imu' else 'deflection',
+            hub='angle' if values['hub_sensor'] == 'encoder' else 'omega',
+            angle_smoothing=values['angle_smoothing'])
 
     def _on_description(self, description) -> None:
         """The simulator's rod (or a change of it): identify against it, from scratch."""
@@ -116,18 +146,32 @@ class RigMonitorNode(Node):
         if self.monitor is None:
             return
         i = list(msg.name).index(messages.HUB_JOINT)
+        t = messages.to_seconds(msg.header.stamp)
+        if self.monitor.config.hub == 'angle':
+            if i >= len(msg.position):
+                self.get_logger().warning('hub/encoder without a position for the hub: '
+                                          'ignored', throttle_duration_sec=5.0)
+                return
+            speed = msg.velocity[i] if i < len(msg.velocity) else None
+            self._take(self.monitor.add_angle, t, msg.position[i], speed)
+            return
         if i >= len(msg.velocity):
             self.get_logger().warning('joint_states without a velocity for the hub: ignored',
                                       throttle_duration_sec=5.0)
             return
-        self._take(self.monitor.add_omega, messages.to_seconds(msg.header.stamp),
-                   msg.velocity[i])
+        self._take(self.monitor.add_omega, t, msg.velocity[i])
 
     def _on_deflection(self, msg: Vector3Stamped) -> None:
         if self.monitor is None:
             return
         self._take(self.monitor.add_deflection, messages.to_seconds(msg.header.stamp),
                    msg.vector.x, msg.vector.y)
+
+    def _on_imu(self, msg: Imu) -> None:
+        if self.monitor is None:
+            return
+        self._take(self.monitor.add_acceleration, messages.to_seconds(msg.header.stamp),
+                   msg.linear_acceleration.x, msg.linear_acceleration.y)
 
     def _take(self, add, *sample) -> None:
         try:

@@ -18,7 +18,8 @@ import math
 from typing import NamedTuple
 
 from builtin_interfaces.msg import Time
-from sensor_msgs.msg import JointState
+from geometry_msgs.msg import WrenchStamped
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Float64, String
 
 from rotrod_core.command.joint_command import MalformedJointCommand, hub_command
@@ -28,7 +29,9 @@ from rotrod_core.live.loop import RealTimeLoop, Sample
 from rotrod_core.model.geometry import rod_centerline, sphere_radius
 from rotrod_core.model.interface import (
     MARKER_NAMESPACE,
+    ROD_ROOT_FRAME,
     ROTOR_FRAME,
+    TIP_FRAME,
     WORLD_FRAME,
     stamp_parts,
 )
@@ -55,20 +58,21 @@ COMMAND_TOPICS = ('cmd/omega', 'cmd/torque', 'joint_command')
 """The subscriptions that carry commands."""
 
 INTERFACES = (
-    sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity); with '
+    sub('cmd/omega', Float64, 'angular-velocity setpoint, rad/s (drive velocity or servo); with '
         'command_timeout > 0 s, when no command is accepted on the active input for '
         'that long, w ramps to 0 at max_angular_acceleration', COMMAND_QOS_DEPTH),
     sub('cmd/torque', Float64, 'hub torque, N m (drive torque: free rotation); with '
         'command_timeout, the torque is set to 0', COMMAND_QOS_DEPTH),
     sub('joint_command', JointState, "ros2_control's topic interface (topic_based_ros2_control): "
-        "joint 'hub''s velocity = setpoint rad/s (drive velocity) or effort = torque N m "
+        "joint 'hub''s velocity = setpoint rad/s (drive velocity or servo) or effort = torque N m "
         '(drive torque), read by name; other joints ignored; each field must be empty or '
         'have one entry per name (sensor_msgs/JointState), else the message is rejected '
         'with a warning and changes nothing; the same shaping, limits and timeout as '
         'cmd/omega and cmd/torque (docs/ros_integration.md)', COMMAND_QOS_DEPTH),
     pub('joint_states', JointState, "joint 'hub': position theta rad, velocity w rad/s, "
         "effort = hub torque N m; the URDF's passive tip joints 'tip_radial', "
-        "'tip_tangential': u, v m, u', v' m/s (the true state, no noise), effort 0; every "
+        "'tip_tangential': u, v m, u', v' m/s, and 'tip_pitch', 'tip_roll': the tip's "
+        "tilt a, -b rad and their rates (the true state, no noise), effort 0; every "
         '1/publish_rate of simulated time', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('tip/deflection', messages.Vector3Stamped, "(u, v, 0) m in frame 'rotor' (rotating: "
         'x radial, y tangential), plus Gaussian noise of deflection_noise m (a sensor)',
@@ -83,6 +87,20 @@ INTERFACES = (
         'Hz, their standard deviations, whether each is valid and why not, estimated from '
         'the published (u, v) over the last estimate_window, every 1/estimate_rate; stamped '
         "at the window's middle, which it describes", SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
+    pub('tip/imu', Imu, "the IMU on the tip mass (REP 145), frame 'tip' (tilted with the "
+        "rod's slope at the tip: z along the rod's tangent): orientation in 'world' "
+        '(not given, covariance[0] = -1, with imu.orientation false), angular velocity '
+        'rad/s and specific force m/s^2 (gravity included) in its frame, with the '
+        'imu.* noise; every 1/imu_rate (docs/sensors.md)', SAMPLE_QOS_DEPTH,
+        keep_all=LOSSLESS),
+    pub('hub/encoder', JointState, "joint 'hub': the encoder's angle, a whole number of "
+        '2 pi / encoder.counts_per_revolution rad, and its speed from counts over '
+        'encoder.window, rad/s; every 1/publish_rate (docs/sensors.md)', SAMPLE_QOS_DEPTH,
+        keep_all=LOSSLESS),
+    pub('rod/strain', WrenchStamped, "the wrench the rod exerts on the hub at its root, "
+        "frame 'rod_root' (x radial, y tangential, z up the rod): shear force k u, k v "
+        'and weight N, bending moments N m (with the strain.* noise); every '
+        '1/publish_rate (docs/sensors.md)', SAMPLE_QOS_DEPTH, keep_all=LOSSLESS),
     pub('markers', messages.MarkerArray, "disk, rod, mass, trail (frame 'world'), at "
         'marker_rate Hz of simulated time'),
     pub('robot_description', String, 'the URDF of the rod (rotrod urdf) with its physical '
@@ -94,9 +112,15 @@ INTERFACES = (
 """Every rod's interfaces, relative to its prefix (none for the simulator's first rod)."""
 SAMPLE_TOPICS = ('joint_states', 'tip/deflection', 'tip/position', 'frequencies',
                  'frequencies/estimate')
+SENSOR_TOPICS = ('tip/imu', 'hub/encoder', 'rod/strain')
+"""The rig sensors' topics (published, as the sample topics, only to subscribers)."""
+LOOKED_AT = SAMPLE_TOPICS + SENSOR_TOPICS + ('markers',)
 LOOK = 0.1
 """Wall seconds between looks at who subscribes to a rod's sample topics (a topic
 nobody subscribes to is not published; as fast as possible, a look per sample)."""
+GOLDEN = (5 ** 0.5 - 1) / 2
+"""The k-th rod looks for subscribers k * GOLDEN (mod 1) of a LOOK period after the
+first: spread evenly over the period whatever the number of rods."""
 
 
 HUB_SHAPES = (0, 1)
@@ -136,7 +160,8 @@ class RodIO:
         on_goal: registers a trajectory goal's token with its server (see the node).
         stagger: the rod's place in the world (0 for the first): its whirl estimates
             come that many samples after the first rod's, modulo the samples per
-            estimate, so that the rods' estimates do not all fall on one sample.
+            estimate, so that the rods' estimates do not all fall on one sample; its
+            looks for subscribers are spread the same way.
     """
 
     def __init__(self, node, loop: RealTimeLoop, engine: SimulationEngine, prefix: str,
@@ -147,8 +172,12 @@ class RodIO:
         frame_prefix = settings.frame_prefix
         self.rotor_frame = frame_prefix + prefix + ROTOR_FRAME
         self.world_frame = frame_prefix + WORLD_FRAME
-        self.observation = Observation(settings, stagger)
+        self.observation = Observation(settings, stagger, engine.name)
         self.messages = messages.SampleMessages(self.rotor_frame, self.world_frame)
+        self.rig = messages.RigMessages(frame_prefix + prefix + TIP_FRAME,
+                                        frame_prefix + prefix + ROD_ROOT_FRAME,
+                                        settings.sensors)
+        self._sensors = settings.sensors
         self.marker_frames = messages.MarkerFrames(self.world_frame,
                                                    prefix + MARKER_NAMESPACE)
         self.trajectories = trajectory_server.TrajectoryServer(
@@ -167,7 +196,8 @@ class RodIO:
                                  conditions=conditions)
         self.io = {i.name: made[prefix + i.name] for i in INTERFACES}
         self.keep_all = KeepAllPublishing(self.io, node.get_logger(), node.context.ok,
-                                          lambda: loop.running, node.stop_grace)
+                                          lambda: loop.running, node.stop_grace,
+                                          phase=(stagger * GOLDEN) % 1.0)
         self._description: str | None = None
 
     def _source(self, topic: str) -> str:
@@ -224,17 +254,17 @@ class RodIO:
         """
         st, obs = s.state, self.observation
         sec, nanosec = stamp_parts(s.stamp)
-        stamp = Time(sec=sec, nanosec=nanosec)
         wait = not settings.real_time_factor       # as fast as possible: lossless
         keep_all = self.keep_all
         # who listens: at every sample as fast as possible (lossless), else every LOOK s
-        keep_all.look(SAMPLE_TOPICS + ('markers',), 0.0 if wait else LOOK)
+        keep_all.look(LOOKED_AT, 0.0 if wait else LOOK)
         send, subscribed, m = keep_all.send, keep_all.subscribed, self.messages
         # the sensor reads the tip whether or not anyone listens (its noise sequence
         # and the estimate do not depend on the subscribers)
         u, v = obs.deflection(float(st.u), float(st.v), settings.deflection_noise)
         if subscribed('joint_states'):
-            send('joint_states', m.joint_state(sec, nanosec, st, s.torque), wait)
+            send('joint_states', m.joint_state(sec, nanosec, st, s.torque,
+                                               float(config.params.rod_length)), wait)
         if subscribed('tip/deflection'):
             send('tip/deflection', m.deflection(sec, nanosec, u, v), wait)
         if subscribed('tip/position'):
@@ -243,10 +273,33 @@ class RodIO:
         if subscribed('frequencies'):
             send('frequencies', m.frequencies(sec, nanosec, float(st.omega), *s.frequencies),
                  wait)
-        self.trajectories.feedback(stamp, s.tracking)
-        return s, stamp, u, v, settings, config, estimator
+        self._publish_sensors(s, sec, nanosec, settings, config, wait)
+        if s.tracking is not None:
+            self.trajectories.feedback(Time(sec=sec, nanosec=nanosec), s.tracking)
+        return s, u, v, settings, config, estimator
 
-    def publish_extras(self, s: Sample, stamp: Time, u: float, v: float,
+    def _publish_sensors(self, s: Sample, sec: int, nanosec: int, settings: NodeSettings,
+                         config: EngineConfig, wait: bool) -> None:
+        """tip/imu, hub/encoder, rod/strain: the rig's sensors read the sample.
+
+        They read every sample whether or not anyone listens (their noise sequences
+        and the encoder's counts do not depend on the subscribers).
+        """
+        send, subscribed, rig = self.keep_all.send, self.keep_all.subscribed, self.rig
+        if settings.sensors is not self._sensors:
+            self._sensors = settings.sensors
+            rig.configure(settings.sensors)
+        reading = self.observation.sensors.read(
+            s.time, 1.0 / settings.publish_rate, self.engine.coefficients, config.params,
+            s.state, s.omega_dot, imu=subscribed('tip/imu'), strain=subscribed('rod/strain'))
+        if reading.imu is not None:
+            send('tip/imu', rig.imu_message(sec, nanosec, reading.imu), wait)
+        if subscribed('hub/encoder'):
+            send('hub/encoder', rig.encoder_message(sec, nanosec, reading.encoder), wait)
+        if reading.wrench is not None:
+            send('rod/strain', rig.strain_message(sec, nanosec, reading.wrench), wait)
+
+    def publish_extras(self, s: Sample, u: float, v: float,
                        settings: NodeSettings, config: EngineConfig,
                        estimator: WhirlEstimator | None) -> None:
         """The sample's whirl estimate (when one is due) and markers (when due).
@@ -263,7 +316,7 @@ class RodIO:
                 send('frequencies/estimate',
                      messages.set_whirl_estimate(m.estimate, middle, estimate), wait)
         if s.markers and subscribed('markers'):
-            self._publish_markers(s, stamp, settings, config)
+            self._publish_markers(s, messages.stamp(s.stamp), settings, config)
 
     def _publish_markers(self, s: Sample, stamp, settings: NodeSettings,
                          config: EngineConfig) -> None:
@@ -286,7 +339,7 @@ class RodIO:
 
     def flush(self, timeout: float) -> None:
         """Wait for the sample topics' subscribers to acknowledge every publication."""
-        self.keep_all.flush(SAMPLE_TOPICS, timeout)
+        self.keep_all.flush(SAMPLE_TOPICS + SENSOR_TOPICS, timeout)
 
     def destroy(self) -> None:
         """Take the rod's interfaces down (it left the world), through the node.
@@ -307,4 +360,5 @@ class RodIO:
         self.trajectories.destroy()
 
 
-__all__ = ['COMMAND_TOPICS', 'INTERFACES', 'ORIGIN', 'Pose', 'RodIO', 'SAMPLE_TOPICS']
+__all__ = ['COMMAND_TOPICS', 'INTERFACES', 'ORIGIN', 'Pose', 'RodIO', 'SAMPLE_TOPICS',
+           'SENSOR_TOPICS']

@@ -36,9 +36,10 @@ import rotrod_core.live.scheduling as scheduling
 from rotrod_core.live.engine import EngineConfig, SimulationEngine
 from rotrod_core.live.loop import RealTimeLoop, Sample, Status
 from rotrod_core.live.world import World
-from rotrod_core.model.interface import WORLD_FRAME
+from rotrod_core.model.interface import WORLD_FRAME, stamp_parts
 
 from . import (
+    cdr,
     entities,
     interfaces,
     messages,
@@ -382,10 +383,14 @@ class SimulatorNode(Node):
         if not statuses:
             return
         fqn = self.get_fully_qualified_name()
-        self._io['/diagnostics'].publish(messages.diagnostics_array(
-            messages.stamp(statuses[0].stamp),
-            [(self._status_name if not st.rod else f'{fqn}: {st.rod}', fqn, st.level,
-              st.message, st.values) for st in statuses]))
+        # as bytes (rotrod_ros.cdr): a world's hundred statuses a second cost a fifth
+        text = messages.value_text
+        sec, nanosec = stamp_parts(statuses[0].stamp)
+        self._io['/diagnostics'].publish(cdr.diagnostic_array(
+            sec, nanosec,
+            [(st.level, self._status_name if not st.rod else f'{fqn}: {st.rod}',
+              st.message, fqn, [(str(k), text(v)) for k, v in st.values])
+             for st in statuses]))
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -73,3 +73,13 @@ def eq26(t, T=15.0, W=2.0):
 def rk4_phase_bound(h, w, t, amplitude):
     """Twice classical RK4's phase error after time t: ~ (h w)^4 w t / 120 x amplitude."""
     return 2 * (h * w) ** 4 * w * t / 120 * amplitude
+
+
+def peak_frequency(x, dt: float, low: float, high: float) -> float:
+    """The frequency (Hz) of the largest spectral peak of samples ``x`` (every ``dt`` s)
+    between ``low`` and ``high`` Hz: Hann window, zero-padded eightfold."""
+    x = np.asarray(x) - np.mean(x)
+    spectrum = np.abs(np.fft.rfft(x * np.hanning(len(x)), 8 * len(x)))
+    f = np.fft.rfftfreq(8 * len(x), dt)
+    band = (f > low) & (f < high)
+    return float(f[band][np.argmax(spectrum[band])])

@@ -51,9 +51,7 @@ def critical_speed(params: RodParams, deflection_limit, start: str = 'quasi_stat
         raise ValueError(f'start must be one of {STARTS}, got {start!r}')
     w0 = (params.natural_frequency_radial if start == 'quasi_static'
           else params.natural_frequency)
-    # the load radius re = (Me / M) r0 (r0 exactly for a massless rod)
-    load_radius = params.eccentricity * (params.eccentric_mass / params.modal_mass)
-    return critical_speed_from(w0, load_radius, deflection_limit, start)
+    return critical_speed_from(w0, params.load_radius, deflection_limit, start)
 
 
 def critical_speed_from(natural_frequency, eccentricity, deflection_limit,
@@ -101,7 +99,7 @@ def step_response(params: RodParams, omega: float, t):
         raise ValueError(f'step_response needs 0 < omega < w0 = {w0:.6f} rad/s, got {omega!r}')
     w1, w2 = w0 - w, w0 + w
     t = np.asarray(t, dtype=float)
-    re = params.eccentricity * (params.eccentric_mass / params.modal_mass)
+    re = params.load_radius
     return (w * w * re / (2 * w0)) * ((1 - np.exp(1j * w1 * t)) / w1
                                                        + (1 - np.exp(-1j * w2 * t)) / w2)
 

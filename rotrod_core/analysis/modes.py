@@ -252,7 +252,7 @@ def static_deflection(params: RodParams, omega):
     """
     w = _omega_array(omega)
     k1, m = params.stiffness_radial, params.modal_mass
-    re = params.eccentricity * (params.eccentric_mass / m)     # the load radius
+    re = params.load_radius
     # u_s = re / (k1 / (M w^2) - 1): finite where M w^2 overflows (u_s -> -re) or
     # underflows (u_s -> 0), where the quotient of the two overflowed was NaN
     with np.errstate(divide='ignore', over='ignore', invalid='ignore'):

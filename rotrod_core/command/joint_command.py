@@ -34,7 +34,8 @@ from rotrod_core.model.interface import HUB_JOINT
 
 FIELDS = ('position', 'velocity', 'effort')
 """The JointState arrays, in message order."""
-DRIVE_FIELDS = {'velocity': ('velocity', 'omega'), 'torque': ('effort', 'torque')}
+DRIVE_FIELDS = {'velocity': ('velocity', 'omega'), 'torque': ('effort', 'torque'),
+                'servo': ('velocity', 'omega')}
 """For each drive: the field that commands it and the kind of command it is."""
 
 
@@ -58,12 +59,13 @@ def hub_command(names: Sequence[str], position: Sequence[float], velocity: Seque
     """The command for joint ``hub`` in a joint_command message, for ``drive``.
 
     ``names``, ``position``, ``velocity``, ``effort`` are the message's arrays;
-    ``drive`` is 'velocity' or 'torque'. Returns ``('omega', w)`` (rad/s) in velocity
-    drive or ``('torque', Q)`` (N m) in torque drive. Raises MalformedJointCommand: a
-    field neither empty nor one entry per name (checked first: such a message breaks
-    JointState's contract), no or repeated ``hub`` name, a non-finite value for the
-    hub, or no entry for the hub in the active drive's field (e.g. effort only in
-    velocity drive). Limits (max_omega, max_torque) are the engine's to check.
+    ``drive`` is 'velocity', 'servo' or 'torque'. Returns ``('omega', w)`` (rad/s) in
+    velocity or servo drive or ``('torque', Q)`` (N m) in torque drive. Raises
+    MalformedJointCommand: a field neither empty nor one entry per name (checked
+    first: such a message breaks JointState's contract), no or repeated ``hub`` name,
+    a non-finite value for the hub, or no entry for the hub in the active drive's
+    field (e.g. effort only in velocity drive). Limits (max_omega, max_torque) are
+    the engine's to check.
     """
     if drive not in DRIVE_FIELDS:
         raise ValueError(f'drive must be one of {tuple(DRIVE_FIELDS)}, got {drive!r}')
@@ -88,7 +90,10 @@ def hub_command(names: Sequence[str], position: Sequence[float], velocity: Seque
     field, kind = DRIVE_FIELDS[drive]
     if field in entries:
         return kind, entries[field]
-    other = {f: d for d, (f, _) in DRIVE_FIELDS.items() if d != drive}
+    other: dict[str, str] = {}               # field -> the first drive it commands
+    for d, (f, _) in DRIVE_FIELDS.items():
+        if f != field:
+            other.setdefault(f, d)
     given = [f for f in entries if f in other]
     if given:
         raise MalformedJointCommand(

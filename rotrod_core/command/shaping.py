@@ -16,6 +16,11 @@ fixed lag D:
   jump of the grid by d while w changes is an error of w' d in w, an impulse that
   leaves the rod whirling;
 - setpoint k is reached at its grid time + D, by a ramp from setpoint k - 1;
+- setpoints that come before the grid is known (the first of a stream, or a start
+  burst: samples held up until the subscriber matched the sender, then delivered
+  together) are due D after their arrival, w waiting as long as the limit lets it;
+  once the grid is known, those still ahead are placed on it, so a start burst held
+  up for less than D does not reach w either;
 - a setpoint that arrives too late for that (a stall longer than D) is not chased:
   until it comes, w follows the stream extrapolated from its last three setpoints
   (w' going on linearly, within the acceleration limit), and then rejoins the
@@ -298,6 +303,10 @@ class OmegaSetpointShaper:
         # (due time, setpoint) of the latest ones
         self._recent: deque[tuple[float, float]] = deque(maxlen=3)
         self._envelope.clear()
+        # (due time, setpoint) of the stream's latest arrivals placed without a grid,
+        # and the start of the first one's ramp (s)
+        self._ungridded: list[tuple[float, float]] = []
+        self._ungridded_from = t
         # grid time of the latest setpoint of an established stream
         self._grid: float | None = None
         self.interval = self.nominal_interval
@@ -305,7 +314,10 @@ class OmegaSetpointShaper:
         self.late_setpoints = 0
 
     def _ramp_at(self, t: float) -> Ramp:
-        return self._ramps[max(0, bisect_right(self._ramps, t, key=_start) - 1)]
+        ramps = self._ramps
+        if len(ramps) == 1:                     # the usual case, twice per rod per block
+            return ramps[0]
+        return ramps[max(0, bisect_right(ramps, t, key=_start) - 1)]
 
     def omega(self, t: float) -> float:
         """Shaped angular velocity at time ``t`` (s), rad/s."""
@@ -371,6 +383,7 @@ class OmegaSetpointShaper:
         previous, self._grid = self._grid, None
         if self._last_arrival is not None and t - self._last_arrival > self.max_stall:
             envelope.clear()                       # a pause: a new stream starts here
+            self._ungridded.clear()
             previous = None
         self._last_arrival = t
         envelope.add(t)
@@ -382,6 +395,7 @@ class OmegaSetpointShaper:
             # as when a stream starts before its subscriber has matched the sender. Its
             # spacing is no interval of the stream, and lines across it run below the
             # punctual samples after it: the grid starts over from this arrival
+            # (the setpoints of the burst, taken without a grid, stay the ones before it)
             envelope.clear()
             envelope.add(t)
             return None
@@ -418,6 +432,8 @@ class OmegaSetpointShaper:
         recent = self._recent
         if grid is None:
             recent.clear()
+        elif self._ungridded:
+            self._place_ungridded(t, grid)
         recent.append((due, w_set))
         limit = self.max_angular_acceleration
         path = None
@@ -430,7 +446,16 @@ class OmegaSetpointShaper:
             # straight to the setpoint, leaving the previous one unreached
             chained = (t <= last.end <= due and abs(w_set - last.omegas[1])
                        <= limit * (due - last.end))
-            start = last.end if chained else t
+            if chained:
+                start = last.end
+            elif grid is None and last.end > t:
+                # setpoints together before the stream's grid is known (a start burst):
+                # w waits as long as the limit lets it still reach this one when due,
+                # so that the grid, once known, can place them where they belong
+                w_now = self.omega(t)
+                start = max(t, min(due - self.interval, due - abs(w_set - w_now) / limit))
+            else:
+                start = t
             reach, target = due, w_set
         else:                                   # late: rejoin the extrapolated stream
             self.late_setpoints += 1
@@ -460,7 +485,46 @@ class OmegaSetpointShaper:
         ramp = Ramp(tuple(times), tuple(omegas))
         self._ramps.append(ramp)
         self.setpoint = w_set
+        if grid is None:
+            if not self._ungridded:
+                self._ungridded_from = start
+            self._ungridded.append((due, w_set))
         return ramp
+
+    def _place_ungridded(self, t: float, grid: float) -> None:
+        """Place the setpoints that came before the grid was known on it (at ``t``, s).
+
+        ``grid`` is the grid time (s) of the arrival that made the grid known; the
+        setpoints before it are the previous sequence numbers, one interval apart. A
+        start burst (samples held up until the subscriber matched the sender) came in
+        together at the time of its last sample: its setpoints are due earlier on the
+        grid, and while those due times are still ahead, w goes through them there, as
+        if they had come on time. Not when that would need more than the acceleration
+        limit, or moves no due time (a punctual start).
+        """
+        placed = self._ungridded
+        self._ungridded = []
+        n = len(placed)
+        knots = [(grid - (n - i) * self.interval + self.delay, w)
+                 for i, (_, w) in enumerate(placed)]
+        if all(abs(new - old) <= 1e-9 for (new, _), (old, _) in zip(knots, placed)):
+            return
+        # from where their ramps begin: the ramps before them stay
+        begin = max(t, self._ungridded_from)
+        ahead = [(d, w) for d, w in knots if d > begin]
+        if not ahead:
+            return
+        times = [begin] + [d for d, _ in ahead]
+        omegas = [self.omega(begin)] + [w for _, w in ahead]
+        limit = self.max_angular_acceleration
+        dt, dw = np.diff(times), np.abs(np.diff(omegas))
+        if np.any(dt <= 0) or np.any(dw > limit * dt):
+            return
+        while len(self._ramps) > 1 and self._ramps[-1].start >= begin:
+            self._ramps.pop()
+        _within_limit(times, omegas, limit)
+        for i in range(1, len(times)):              # one ramp per setpoint, chained
+            self._ramps.append(Ramp((times[i - 1], times[i]), (omegas[i - 1], omegas[i])))
 
     def _extrapolation(self) -> tuple[np.ndarray, np.ndarray]:
         """The stream extrapolated from its latest setpoint for ``max_stall``.
@@ -498,6 +562,7 @@ class OmegaSetpointShaper:
         w_target, t = _omega('target', target), finite_number('time', time)
         t = max(t, self._ramps[0].start)
         self._envelope.clear()
+        self._ungridded.clear()
         self._grid = None
         self._recent.clear()
         w0 = self.omega(t)
@@ -512,6 +577,8 @@ class OmegaSetpointShaper:
 
     def forget_before(self, t: float) -> None:
         """Drop ramps that ended before time ``t`` (s); keeps memory bounded."""
+        if len(self._ramps) < 2:                # the one in force (each rod, each block)
+            return
         i = max(0, bisect_right(self._ramps, t, key=_start) - 1)
         if i:
             del self._ramps[:i]

@@ -54,15 +54,19 @@ differentiated: w should be smooth at the sample rate).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.signal import savgol_filter
 
 import rotrod_core.model.propagation as propagation
 from rotrod_core.analysis.critical import STARTS, critical_speed_from
 from rotrod_core.model.equations import Coefficients
+from rotrod_core.model.geometry import TIP_SLOPE
+from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import finite_array, finite_number
 
 MIN_SAMPLES = 20            # fewest samples identify_rig accepts
@@ -110,8 +114,11 @@ class RigEstimate:
         end_time: last sample time, s.
         initial_deflection: fitted z = u + i v at ``start_time``, m.
         initial_rate: fitted z' at ``start_time``, m/s.
-        fixed: names of the parameters given by the caller (not identified).
+        fixed: names of the parameters given by the caller (not identified), or
+            carried from an earlier window (:class:`RigIdentifier`).
         iterations: Gauss-Newton iterations of the output-error fit.
+        accelerometer_bias: the accelerometer's fitted bias x + i y, m/s^2 (None from
+            the deflection).
         covariance: 3x3 covariance of (natural_frequency, eccentricity, damping_ratio).
     """
 
@@ -130,6 +137,7 @@ class RigEstimate:
     initial_rate: complex = complex(math.nan, math.nan)
     fixed: tuple = ()
     iterations: int = 0
+    accelerometer_bias: complex | None = None
     covariance: np.ndarray = field(default_factory=lambda: np.full((3, 3), math.nan),
                                    compare=False, repr=False)
 
@@ -174,6 +182,46 @@ class RigEstimate:
 
 # -- input -----------------------------------------------------------------------------
 
+@dataclass(frozen=True)
+class Accelerometer:
+    """The tip accelerometer's two horizontal axes as the measurement (instead of z).
+
+    An IMU on the tip mass (``tip/imu``, :mod:`rotrod_core.sensors.imu`) reads the
+    specific force in its frame, tilted with the rod. Its x + i y (m/s^2) is, to first
+    order in the deflection (docs/identification.md#imu),
+
+        y = -(a + c) z - g z' + (rho - 1) r0 (i w' - w^2) + beta,
+
+    the tip's acceleration in the rotor frame z'' + 2 i w z' + (i w' - w^2)(rho r0 + z)
+    with z'' from the equation of motion: the rod's restoring and damping forces per
+    modal mass, the rigid acceleration of the tip's radius rho r0 beyond the load radius
+    r0 the forcing sees, the tilt's share of gravity -c z, and a constant bias beta
+    (complex, fitted as two nuisance parameters). The unknowns enter as before: z is
+    linear in (z(t0), z'(t0), r0), and so is y.
+
+    Attributes:
+        tilt_gravity: c = gravity x TIP_SLOPE / rod_length, 1/s^2 (0 without gravity).
+        radius_ratio: rho = M / Me, the tip's radius over the load radius (1 for a
+            massless rod; M, Me the modal and eccentric masses).
+        bias: whether a constant bias on each axis is fitted (a real accelerometer has
+            one; without it a bias shows up as a wrong r0).
+    """
+
+    tilt_gravity: float = 0.0
+    radius_ratio: float = 1.0
+    bias: bool = True
+
+    def __post_init__(self):
+        finite_number('tilt_gravity', self.tilt_gravity, nonnegative=True)
+        finite_number('radius_ratio', self.radius_ratio, positive=True)
+
+    @classmethod
+    def of(cls, params: RodParams, bias: bool = True) -> Accelerometer:
+        """The accelerometer of a rig with these (nominal) parameters."""
+        return cls(tilt_gravity=float(params.gravity) * TIP_SLOPE / float(params.rod_length),
+                   radius_ratio=float(params.modal_mass / params.eccentric_mass), bias=bias)
+
+
 @dataclass
 class _Record:
     """A validated record and the hub's motion at the Gauss points of every interval."""
@@ -187,6 +235,11 @@ class _Record:
     wd1: np.ndarray
     wd2: np.ndarray
     slopes: np.ndarray
+
+    @property
+    def rigid(self) -> np.ndarray:
+        """The rotor frame's acceleration per metre of radius, i w' - w^2, at the samples."""
+        return 1j * self.slopes - self.omega**2
 
     def __post_init__(self):
         # the kernel's isotropic system at the Gauss points for w0^2 = g = 0 and a unit
@@ -388,24 +441,6 @@ def _step_matrices(rec: _Record, a: float, g: float, out=None) -> np.ndarray:
     return S if out is None else out
 
 
-def _chain(S: np.ndarray, n: int | None = None,
-           work: propagation.ChainWorkspace | None = None) -> np.ndarray:
-    """Rows (z, dz/da, dz/dg) of the products S_k ... S_0 on unit initial states.
-
-    The initial states are (z0, z0', r0) = the unit vectors: shape (n+1, 3, 3),
-    [k, row, initial component], by the kernel's
-    :func:`~rotrod_core.model.propagation.affine_chain`. With ``work``, S is its step
-    buffer and n the number of steps.
-    """
-    d = S.shape[1]
-    if work is None:
-        return propagation.affine_chain(S, np.eye(d, 3, dtype=complex), rows=(0, 3, 5))
-    if n is None:
-        raise ValueError('_chain: n (the number of steps) is needed with work')
-    return propagation.affine_chain(S, np.eye(d, 3, dtype=complex), rows=(0, 3, 5), steps=n,
-                                    work=work)
-
-
 def _stack(c: np.ndarray) -> np.ndarray:
     """Complex columns (N, p) as real rows (2N, p): real parts, then imaginary parts."""
     return np.concatenate([c.real, c.imag])
@@ -431,15 +466,52 @@ class _Problem:
     """Output-error least squares for one record, with some parameters fixed."""
 
     def __init__(self, rec: _Record, zeta=None, r0=None,
-                 work: propagation.ChainWorkspace | None = None):
+                 work: propagation.ChainWorkspace | None = None,
+                 sensor: Accelerometer | None = None):
         self.rec = rec
         self.work = work or propagation.ChainWorkspace()
         self.zeta = zeta        # fixed damping ratio (g = 2 zeta sqrt(a)), or None
         self.r0 = r0            # fixed eccentricity, or None
+        self.sensor = sensor    # the accelerometer measured instead of z, or None
         self.y = _stack(rec.z[:, None])[:, 0]
         self.nonlinear = ('a',) if zeta is not None else ('a', 'g')
         self.free = self.nonlinear + ('z0r', 'z0i', 'dz0r', 'dz0i') \
-            + (() if r0 is not None else ('r0',))
+            + (() if r0 is not None else ('r0',)) \
+            + (('bias_x', 'bias_y') if sensor is not None and sensor.bias else ())
+
+    def _outputs(self, a: float, g: float):
+        """The output's responses to unit (z0, z0', r0) and their a- and g-derivatives.
+
+        Three (N, 3) arrays; None if the model overflows.
+        """
+        n = self.rec.n - 1
+        rows = (0, 3, 5) if self.sensor is None else (0, 1, 3, 4, 5, 6)
+        with np.errstate(all='ignore'):
+            S = _step_matrices(self.rec, a, g, out=self.work.steps(n, 7, complex))
+            Y = propagation.affine_chain(S, np.eye(7, 3, dtype=complex), rows=rows,
+                                         steps=n, work=self.work)
+            if self.sensor is None:
+                out = Y[:, 0, :], Y[:, 1, :], Y[:, 2, :]
+            else:           # y = -(a + c) z - g z' + (rho - 1) r0 (i w' - w^2)
+                k = a + self.sensor.tilt_gravity
+                z, dz, z_a, dz_a, z_g, dz_g = (Y[:, i, :] for i in range(6))
+                basis = -k * z - g * dz
+                basis[:, 2] += (self.sensor.radius_ratio - 1.0) * self.rec.rigid
+                out = basis, -z - k * z_a - g * dz_a, -dz - k * z_g - g * dz_g
+        return out if all(np.all(np.isfinite(x)) for x in out) else None
+
+    def linear_columns(self, basis: np.ndarray) -> list:
+        """The output's columns of the free linear parameters, in :attr:`free`'s order.
+
+        z0 and z0' (real and imaginary each), r0 when free, the bias when fitted.
+        """
+        cols = [basis[:, 0], 1j * basis[:, 0], basis[:, 1], 1j * basis[:, 1]]
+        if self.r0 is None:
+            cols.append(basis[:, 2])
+        if 'bias_x' in self.free:
+            ones = np.ones(self.rec.n)
+            cols += [ones + 0j, 1j * ones]
+        return cols
 
     def g_of(self, a: float, g: float) -> float:
         return g if self.zeta is None else 2.0 * self.zeta * math.sqrt(max(a, 0.0))
@@ -447,20 +519,14 @@ class _Problem:
     def evaluate(self, a: float, g: float) -> _Point | None:
         """The fit of the linear parameters at (a, g); None if the model overflows."""
         g = self.g_of(a, g)
-        n = self.rec.n - 1
-        with np.errstate(all='ignore'):
-            Y = _chain(_step_matrices(self.rec, a, g, out=self.work.steps(n, 7, complex)), n,
-                       self.work)
-        if not np.all(np.isfinite(Y)):
+        outputs = self._outputs(a, g)
+        if outputs is None:
             return None
-        basis, da, dg = Y[:, 0, :], Y[:, 1, :], Y[:, 2, :]
-        cols = [basis[:, 0], 1j * basis[:, 0], basis[:, 1], 1j * basis[:, 1]]
+        basis, da, dg = outputs
         y = self.y
-        if self.r0 is None:
-            cols.append(basis[:, 2])
-        else:
+        if self.r0 is not None:
             y = y - self.r0 * _stack(basis[:, 2:3])[:, 0]
-        A = _stack(np.stack(cols, axis=1))
+        A = _stack(np.stack(self.linear_columns(basis), axis=1))
         norms = np.linalg.norm(A, axis=0)
         norms[norms == 0] = 1.0
         coef = np.linalg.lstsq(A / norms, y, rcond=1e-13)[0] / norms
@@ -495,7 +561,7 @@ def _moved(point: _Point, step: np.ndarray, k_nl: int) -> _Point:
     residual = point.residual - point.jacobian @ step
     linear = point.linear + step[k_nl:]
     g = point.g + step[1] if k_nl == 2 else point.g
-    r0 = float(linear[4]) if len(linear) > 4 else point.r0
+    r0 = float(linear[4]) if 'r0' in point.free else point.r0
     return dataclasses.replace(point, a=point.a + float(step[0]), g=g, linear=linear, r0=r0,
                                residual=residual, rss=float(residual @ residual))
 
@@ -566,12 +632,10 @@ def _refine(problem: _Problem, a: float, g: float, max_iterations: int = _MAX_IT
 
 # -- the equation-error start ---------------------------------------------------------
 
-def _modulating_start(rec: _Record):
-    """(a, g, r0) from modulating functions phi = s^2 (1 - s)^2 over windows (module doc).
+def _uniform(rec: _Record):
+    """(dt, z, w, w') of the record on a uniform grid of its span.
 
-    For each window: a P - g D1 - r0 F = -D2 + 2i W1 + Q with P, D1, D2 = int phi,
-    phi', phi'' times z, W1 = int phi' w z, Q = int phi (i w' + w^2) z,
-    F = int phi (w^2 - i w').
+    Interpolated when the samples are not uniform.
     """
     t = rec.t
     n = rec.n
@@ -582,10 +646,18 @@ def _modulating_start(rec: _Record):
         wd = np.interp(uniform, t, rec.slopes)
     else:
         z, w, wd = rec.z, rec.omega, rec.slopes
-    dt = (t[-1] - t[0]) / (n - 1)
-    signals = np.stack([z, w * z, (1j * wd + w * w) * z, w * w - 1j * wd])
-    rows, rhs, weights = [], [], []
-    m = n // 2
+    return (t[-1] - t[0]) / (n - 1), z, w, wd
+
+
+def _modulated(signals: np.ndarray, dt: float):
+    """Each signal integrated against phi, phi', phi'' over sliding windows.
+
+    phi = s^2 (1 - s)^2 on windows of m samples, m = n/2, n/4, ... >= 9, hopping by m/4.
+    Yields, per window length, the integrals (three arrays (signals, windows): against
+    phi, phi', phi'') and the equation-error scales of white noise on the signal for
+    a = 0 and a = 1 (sqrt(dt sum phi''^2), sqrt(dt sum phi^2)).
+    """
+    m = signals.shape[1] // 2
     while m >= 9:
         hop = max(1, m // 4)
         s = np.linspace(0.0, 1.0, m)
@@ -595,24 +667,36 @@ def _modulating_start(rec: _Record):
         ddphi = (2 - 12 * s + 12 * s * s) / L**2
         ddphi[[0, -1]] *= 0.5       # trapezoidal rule (phi and phi' vanish at the ends)
         win = np.lib.stride_tricks.sliding_window_view(signals, m, axis=1)[:, ::hop]
-        P, D1, D2 = (win[0] @ k * dt for k in (phi, dphi, ddphi))
-        W1 = win[1] @ dphi * dt
-        Q = win[2] @ phi * dt
-        F = win[3] @ phi * dt
-        rows.append(np.stack([P, -D1, -F], axis=1))
-        rhs.append(-D2 + 2j * W1 + Q)
-        # equation-error scale of white noise on z, for a = 0 and for a = 1
-        weights.append(np.full(len(P), math.sqrt(dt * np.sum(ddphi**2))))
-        weights.append(np.full(len(P), math.sqrt(dt * np.sum(phi**2))))
+        yield ((win @ phi * dt, win @ dphi * dt, win @ ddphi * dt),
+               (math.sqrt(dt * np.sum(ddphi**2)), math.sqrt(dt * np.sum(phi**2))))
         m //= 2
+
+
+def _equation_error(signals: np.ndarray, dt: float, columns):
+    """(a, g, the rest) of the modulated equation a P - g D1 + columns = -D2 + 2i W1 + Q.
+
+    ``signals``: (the measured y, w y, (i w' + w^2) y, then the forcing's signals);
+    P, D1, D2 = int phi, phi', phi'' times y, W1 = int phi' w y, Q = int phi (i w' +
+    w^2) y; ``columns(integrals)`` gives the forcing's columns (windows, k) from the
+    integrals of the signals (:func:`_modulated`). Weighted least squares, the weights
+    re-evaluated at the estimate of a (three passes); None if no window fits or a <= 0.
+    """
+    rows, rhs, scale_dd, scale_p = [], [], [], []
+    for (I0, I1, I2), (sd, sp) in _modulated(signals, dt):
+        P, D1, D2, W1, Q = I0[0], I1[0], I2[0], I1[1], I0[2]
+        rows.append(np.concatenate([np.stack([P, -D1], axis=1), columns(I0, I1, I2)],
+                                   axis=1))
+        rhs.append(-D2 + 2j * W1 + Q)
+        scale_dd.append(np.full(len(P), sd))
+        scale_p.append(np.full(len(P), sp))
     if not rows:
         return None
     R = np.concatenate(rows)
     y = np.concatenate(rhs)
-    w_dd = np.concatenate(weights[0::2])
-    w_p = np.concatenate(weights[1::2])
+    w_dd = np.concatenate(scale_dd)
+    w_p = np.concatenate(scale_p)
     a = 0.0
-    est = np.zeros(3)
+    est = np.zeros(R.shape[1])
     for _ in range(3):
         wt = 1.0 / np.sqrt(w_dd**2 + (a * w_p) ** 2)
         A = _stack(R * wt[:, None])
@@ -623,7 +707,47 @@ def _modulating_start(rec: _Record):
         if not (np.all(np.isfinite(est)) and est[0] > 0):
             return None
         a = float(est[0])
-    return float(est[0]), float(est[1]), float(est[2])
+    return est
+
+
+def _modulating_start(rec: _Record):
+    """(a, g, r0) from modulating functions phi = s^2 (1 - s)^2 over windows (module doc).
+
+    For each window: a P - g D1 - r0 F = -D2 + 2i W1 + Q with P, D1, D2 = int phi,
+    phi', phi'' times z, W1 = int phi' w z, Q = int phi (i w' + w^2) z,
+    F = int phi (w^2 - i w').
+    """
+    dt, z, w, wd = _uniform(rec)
+    signals = np.stack([z, w * z, (1j * wd + w * w) * z, w * w - 1j * wd])
+    est = _equation_error(signals, dt, lambda I0, I1, I2: -I0[3][:, None])
+    return None if est is None else (float(est[0]), float(est[1]), float(est[2]))
+
+
+def _accelerometer_start(rec: _Record, sensor: Accelerometer):
+    """(a, g, r0) from the accelerometer's y by modulating functions (docs/identification.md).
+
+    Applying the rod's operator L = d^2 + (g + 2 i w) d + (a - w^2 + i w') to
+    y = -(a + c) z - g z' + (rho - 1) r0 R + beta (R = i w' - w^2), with L z = -r0 R
+    and L z' taken as (L z)' (exact at constant w; it drops g times w' terms):
+
+        L y = r0 (c R + (rho - 1) L0 R) + (a r0) rho R + (g r0) rho R' + beta R + a beta,
+
+    L0 = L at a = g = 0. Linear in a, g, r0 and the products a r0, g r0, beta, a beta
+    taken as unknowns of their own; integrated against phi, derivatives moved onto it.
+    """
+    dt, y, w, wd = _uniform(rec)
+    R = 1j * wd - w * w
+    c, rho = sensor.tilt_gravity, sensor.radius_ratio
+    signals = np.stack([y, w * y, (1j * wd + w * w) * y, R, w * R, (-1j * wd - w * w) * R,
+                        np.ones_like(y)])
+
+    def columns(I0, I1, I2):
+        L0R = I2[3] - 2j * I1[4] + I0[5]
+        return -np.stack([c * I0[3] + (rho - 1) * L0R, rho * I0[3], -rho * I1[3], I0[3],
+                          1j * I0[3], I0[6], 1j * I0[6]], axis=1)
+
+    est = _equation_error(signals, dt, columns)
+    return None if est is None else (float(est[0]), float(est[1]), float(est[2]))
 
 
 def _grid_start(problem: _Problem, rec: _Record):
@@ -716,6 +840,22 @@ _WHY = {
 }
 
 
+_WHY_BIASED = {
+    'eccentricity': 'the hub turns too little (w and w\' near zero) for the eccentric '
+                    'forcing r0 (w^2 - i w\') to act, or w changes too little: the '
+                    'forcing\'s share of the acceleration is then nearly constant, as the '
+                    'accelerometer\'s bias is (a record with w changing, from rest for one, '
+                    'separates them; give eccentricity= if it is known)',
+}
+
+
+def _why(name: str, problem: _Problem) -> str:
+    """Why ``name`` is not identifiable, for what the problem measures."""
+    if problem.sensor is not None and problem.sensor.bias and name in _WHY_BIASED:
+        return _WHY_BIASED[name]
+    return _WHY[name]
+
+
 def _estimate(point, problem, iterations, drop=(), fixed=()):
     cov, sigma2 = _covariances(point, problem, drop)
     (w0, r0, zeta), phys = _physical(point, problem, cov)
@@ -730,6 +870,7 @@ def _estimate(point, problem, iterations, drop=(), fixed=()):
         stds[name] = math.nan
     rec = problem.rec
     coef = point.linear
+    bias = complex(coef[-2], coef[-1]) if 'bias_x' in point.free else None
     return RigEstimate(
         natural_frequency=values['natural_frequency'],
         eccentricity=values['eccentricity'],
@@ -741,7 +882,8 @@ def _estimate(point, problem, iterations, drop=(), fixed=()):
         residual_rms=math.sqrt(point.rss / rec.n),
         samples=rec.n, start_time=float(rec.t[0]), end_time=float(rec.t[-1]),
         initial_deflection=complex(coef[0], coef[1]), initial_rate=complex(coef[2], coef[3]),
-        fixed=tuple(fixed), iterations=iterations, covariance=phys)
+        fixed=tuple(fixed), iterations=iterations, covariance=phys,
+        accelerometer_bias=bias)
 
 
 def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None):
@@ -752,10 +894,11 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
     zhat = model[:n] + 1j * model[n:]
     variation = float(np.sum(np.abs(zhat - zhat.mean()) ** 2))
     if not variation > _DETECTION * 2 * sigma2:
+        what, unit = _measured(problem.sensor), _measured(problem.sensor, unit=True)
         raise NotIdentifiable(
-            f'no motion above the noise: the fitted deflection varies by '
-            f'{math.sqrt(variation / n):.3g} m RMS, against noise of '
-            f'{math.sqrt(sigma2):.3g} m per sample (energy ratio '
+            f'no motion above the noise: the fitted {what} varies by '
+            f'{math.sqrt(variation / n):.3g} {unit} RMS, against noise of '
+            f'{math.sqrt(sigma2):.3g} {unit} per sample (energy ratio '
             f'{variation / (2 * sigma2) if sigma2 else 0.0:.3g}, needs > {_DETECTION:g})',
             tuple(_NAMES[k] for k in ('a', 'r0', 'g')))
     bad = dict(unidentified or {})
@@ -764,7 +907,7 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
         singular |= group
         for name in group:
             if len(group) == 1:
-                why = _WHY[name]
+                why = _why(name, problem)
             else:
                 others = ' and '.join(sorted(group - {name}))
                 why = (f'it enters the motion only in a combination with {others} (a '
@@ -787,7 +930,7 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
             if name not in fixed and not std <= limit:
                 value = getattr(est, name)
                 bad[name] = (f'its standard deviation {std:.3g} (estimate {value:.6g}) '
-                             f'exceeds the limit, {text}: ' + _WHY[name])
+                             f'exceeds the limit, {text}: ' + _why(name, problem))
         if not bad:
             return est
     inv = {v: k for k, v in _NAMES.items()}
@@ -807,6 +950,13 @@ def _judge(point, problem, iterations, limits: _Limits, fixed, unidentified=None
 
 # -- public -----------------------------------------------------------------------------
 
+def _measured(sensor: Accelerometer | None, unit: bool = False) -> str:
+    """What the record measures (with its unit)."""
+    if sensor is None:
+        return 'm' if unit else 'deflection'
+    return 'm/s^2' if unit else 'tip acceleration'
+
+
 def _fixed_value(name, value, *, nonnegative=True):
     if value is None:
         return None
@@ -814,29 +964,35 @@ def _fixed_value(name, value, *, nonnegative=True):
 
 
 def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX_ITERATIONS,
-         work: propagation.ChainWorkspace | None = None):
-    """Identify from a record; ``warm`` = (a, g) starts Gauss-Newton there instead."""
+         work: propagation.ChainWorkspace | None = None, sensor: Accelerometer | None = None):
+    """Identify from a record; ``warm`` = (a, g) starts Gauss-Newton there instead.
+
+    With ``sensor`` the record's z is that accelerometer's x + i y, and the
+    equation-error start is the accelerometer's.
+    """
     fixed = tuple(n for n, v in (('damping_ratio', zeta), ('eccentricity', r0))
                   if v is not None)
     unidentified = {}
     turning = bool(np.any(rec.omega != 0) or np.any(rec.slopes != 0))
     if not turning and not np.any(rec.z != rec.z[0]):
-        raise NotIdentifiable('no motion: the hub does not turn (w = 0) and the deflection '
-                              'does not change (no whirl)')
+        raise NotIdentifiable(f'no motion: the hub does not turn (w = 0) and the '
+                              f'{_measured(sensor)} does not change (no whirl)')
     if not turning and r0 is None:
         unidentified['eccentricity'] = ('the hub does not turn (w = 0 throughout), so the '
                                         'eccentric forcing r0 (w^2 - i w\') is zero')
         r0 = 0.0
     if not np.any(rec.z):
-        raise NotIdentifiable('no motion: the deflection is zero throughout, so it carries '
-                              'no information on the natural frequency or the damping')
-    problem = _Problem(rec, zeta=zeta, r0=r0, work=work)
+        raise NotIdentifiable(f'no motion: the {_measured(sensor)} is zero throughout, so it '
+                              'carries no information on the natural frequency or the '
+                              'damping')
+    problem = _Problem(rec, zeta=zeta, r0=r0, work=work, sensor=sensor)
     point, iterations, converged = None, 0, False
     if warm is not None:
         point, iterations, converged = _refine(problem, warm[0], warm[1],
                                                max_iterations=max_iterations, lazy=True)
     if point is None or not converged:
-        start = _modulating_start(rec)
+        start = _modulating_start(rec) if sensor is None else \
+            _accelerometer_start(rec, sensor)
         if start is not None:
             point, iterations, converged = _refine(problem, start[0], start[1])
         if point is None or not converged:
@@ -850,13 +1006,15 @@ def _fit(rec: _Record, zeta, r0, limits: _Limits, warm=None, max_iterations=_MAX
 
 
 def identify_rig(t, u, v, omega, *, omega_dot=None, damping_ratio=None, eccentricity=None,
-                 max_relative_std: float = 0.1, max_damping_std: float = 0.1) -> RigEstimate:
+                 max_relative_std: float = 0.1, max_damping_std: float = 0.1,
+                 sensor: Accelerometer | None = None) -> RigEstimate:
     """Natural frequency, eccentricity and damping of the rig from one record.
 
     Args:
         t: sample times, s (strictly increasing; irregular allowed).
-        u: radial deflection of the mass, m (rotating frame).
-        v: tangential deflection, m.
+        u: radial deflection of the mass, m (rotating frame); with ``sensor``, the tip
+            accelerometer's x, m/s^2.
+        v: tangential deflection, m; with ``sensor``, the accelerometer's y, m/s^2.
         omega: the hub's measured angular velocity at the same times, rad/s.
         omega_dot: its angular acceleration, rad/s^2 (default: from a cubic spline of
             ``omega``).
@@ -865,6 +1023,10 @@ def identify_rig(t, u, v, omega, *, omega_dot=None, damping_ratio=None, eccentri
         max_relative_std: largest accepted standard deviation of w0 and of r0, as a
             fraction of the estimate.
         max_damping_std: largest accepted standard deviation of the damping ratio.
+        sensor: the :class:`Accelerometer` that ``u`` and ``v`` come from, or None (they
+            are the deflection). The estimate's noise_std and residual_rms are then in
+            m/s^2, and its initial_deflection and initial_rate are the fit's nuisance
+            state all the same (m, m/s).
 
     Returns:
         :class:`RigEstimate`.
@@ -880,18 +1042,19 @@ def identify_rig(t, u, v, omega, *, omega_dot=None, damping_ratio=None, eccentri
     r0 = _fixed_value('eccentricity', eccentricity)
     limits = _Limits(finite_number('max_relative_std', max_relative_std, positive=True),
                      finite_number('max_damping_std', max_damping_std, positive=True))
-    return _fit(rec, zeta, r0, limits)
+    return _fit(rec, zeta, r0, limits, sensor=sensor)
 
 
 def rig_cramer_rao(t, omega, natural_frequency, eccentricity, damping_ratio, noise_std, *,
-                   omega_dot=None, initial_deflection=0j,
-                   initial_rate=0j) -> dict[str, float]:
+                   omega_dot=None, initial_deflection=0j, initial_rate=0j,
+                   sensor: Accelerometer | None = None) -> dict[str, float]:
     """Cramer-Rao standard deviations of (w0, r0, zeta) for a record of this drive.
 
-    White Gaussian noise of ``noise_std`` (m) on u and on v, the initial state unknown
-    (nuisance): sigma^2 (J^T J)^-1 at the given parameters, J the Jacobian of the model
-    output. Returns a dict with 'natural_frequency', 'eccentricity', 'damping_ratio'
-    (standard deviations) and 'covariance' (3x3).
+    White Gaussian noise of ``noise_std`` (m; with ``sensor``, m/s^2 on the
+    accelerometer's x and y) on u and on v, the initial state unknown (nuisance, and the
+    accelerometer's bias when it fits one): sigma^2 (J^T J)^-1 at the given parameters,
+    J the Jacobian of the model output. Returns a dict with 'natural_frequency',
+    'eccentricity', 'damping_ratio' (standard deviations) and 'covariance' (3x3).
     """
     w = np.asarray(omega, dtype=float)
     zeros = np.zeros_like(w)
@@ -901,15 +1064,17 @@ def rig_cramer_rao(t, omega, natural_frequency, eccentricity, damping_ratio, noi
     zeta = finite_number('damping_ratio', damping_ratio)
     sigma = finite_number('noise_std', noise_std, positive=True)
     a, g = w0 * w0, 2 * zeta * w0
-    Y = _chain(_step_matrices(rec, a, g))
+    problem = _Problem(rec, sensor=sensor)
+    outputs = problem._outputs(a, g)
+    if outputs is None:
+        raise ValueError('the model overflows on this record')
+    basis, da, dg = outputs
     x0 = np.array([complex(initial_deflection), complex(initial_rate), r0])
-    basis, da, dg = Y[:, 0, :], Y[:, 1, :], Y[:, 2, :]
-    cols = np.stack([da @ x0, dg @ x0, basis[:, 0], 1j * basis[:, 0], basis[:, 1],
-                     1j * basis[:, 1], basis[:, 2]], axis=1)
-    J = _stack(cols)
+    cols = [da @ x0, dg @ x0, *problem.linear_columns(basis)]     # r0's is the 7th
+    J = _stack(np.stack(cols, axis=1))
     Js, scale, _ = _scaled(J)
     cov = np.linalg.pinv(Js.T @ Js, hermitian=True) * sigma**2 / np.outer(scale, scale)
-    T = np.zeros((3, 7))
+    T = np.zeros((3, len(cols)))
     T[0, 0] = 0.5 / w0
     T[1, 6] = 1.0
     T[2, 0] = -zeta / (2 * a)
@@ -921,6 +1086,30 @@ def rig_cramer_rao(t, omega, natural_frequency, eccentricity, damping_ratio, noi
 
 
 # -- online -----------------------------------------------------------------------------
+
+HUB_INPUTS = ('omega', 'angle')
+"""What a :class:`RigIdentifier` is fed for the hub: its angular velocity or its angle."""
+
+
+def _rates_from_angle(t: np.ndarray, angle: np.ndarray, samples: int):
+    """(w, w') at the samples from the hub's angle (rad/s, rad/s^2).
+
+    A quadratic Savitzky-Golay fit over ``samples`` samples (odd), the angle unwrapped
+    first (an encoder may wrap at 2 pi). The samples must be evenly spaced (to 1 % of
+    their interval); NotIdentifiable otherwise.
+    """
+    h = np.diff(t)
+    step = float(np.median(h))
+    if not np.all(np.abs(h - step) <= 0.01 * step):
+        raise NotIdentifiable('the hub angle is differentiated on evenly spaced samples; '
+                              f'these are spaced {h.min():.3g} to {h.max():.3g} s')
+    if len(t) < samples:
+        raise NotIdentifiable(f'too few samples ({len(t)}) for the hub angle\'s fit over '
+                              f'{samples}')
+    theta = np.unwrap(angle)
+    return (savgol_filter(theta, samples, 2, deriv=1, delta=step),
+            savgol_filter(theta, samples, 2, deriv=2, delta=step))
+
 
 class RigIdentifier:
     """The rig identified over a sliding window of samples, fed one sample at a time.
@@ -948,12 +1137,20 @@ class RigIdentifier:
         max_relative_std: as in :func:`identify_rig`.
         max_damping_std: as in :func:`identify_rig`.
         warm_iterations: Gauss-Newton iterations allowed to a warm start.
+        sensor: the :class:`Accelerometer` whose x, y are pushed as (u, v), or None
+            (the deflection).
+        hub: what is pushed as ``omega``: 'omega' (the hub's angular velocity, rad/s)
+            or 'angle' (its angle, rad, e.g. an encoder's quantised one: w and w' are
+            then taken from it over each window by a quadratic Savitzky-Golay fit over
+            ``angle_smoothing`` s, which needs evenly spaced samples).
+        angle_smoothing: the span of that fit, s (at least 5 samples).
     """
 
     def __init__(self, window: float = 10.0, sample_interval: float = 0.01,
                  update_interval: float = 0.1, *, damping_ratio=None, eccentricity=None,
                  max_relative_std: float = 0.1, max_damping_std: float = 0.1,
-                 warm_iterations: int = 4):
+                 warm_iterations: int = 4, sensor: Accelerometer | None = None,
+                 hub: str = 'omega', angle_smoothing: float = 0.2):
         self.window = finite_number('RigIdentifier.window', window, positive=True)
         self.sample_interval = finite_number('RigIdentifier.sample_interval',
                                              sample_interval, positive=True)
@@ -973,6 +1170,17 @@ class RigIdentifier:
             raise ValueError(f'warm_iterations must be an integer >= 1, got '
                              f'{warm_iterations!r}')
         self.warm_iterations = warm_iterations
+        if sensor is not None and not isinstance(sensor, Accelerometer):
+            raise ValueError(f'sensor must be an Accelerometer or None, got {sensor!r}')
+        self.sensor = sensor
+        if hub not in HUB_INPUTS:
+            raise ValueError(f'hub must be one of {HUB_INPUTS}, got {hub!r}')
+        self.hub = hub
+        self.angle_samples = 2 * round(0.5 * finite_number(
+            'angle_smoothing', angle_smoothing, positive=True) / self.sample_interval) + 1
+        if hub == 'angle' and self.angle_samples < 5:
+            raise ValueError(f'angle_smoothing {angle_smoothing!r} s spans fewer than 5 '
+                             f'samples of {self.sample_interval!r} s')
         self._capacity = 2 * int(math.ceil(samples)) + 16
         self._work = propagation.ChainWorkspace()
         self.reset()
@@ -985,6 +1193,7 @@ class RigIdentifier:
         self._last_update = -math.inf
         self._with_rate: bool | None = None
         self._warm: tuple[float, float] | None = None
+        self._eccentricity: RigEstimate | None = None    # the best-determined r0's
         self.estimate: RigEstimate | None = None
         self.reason = 'window not filled'
         self.error: NotIdentifiable | None = None
@@ -1037,17 +1246,48 @@ class RigIdentifier:
         data = self._buf[self._begin:self._end]
         self._last_update = newest
         try:
-            rec = _record(data[:, 0], data[:, 1], data[:, 2], data[:, 3],
-                          data[:, 4] if self._with_rate else None)
-            est = _fit(rec, self.zeta, self.r0, self.limits, warm=self._warm,
-                       max_iterations=self.warm_iterations, work=self._work)
+            if self.hub == 'angle':
+                omega, omega_dot = _rates_from_angle(data[:, 0], data[:, 3],
+                                                     self.angle_samples)
+            else:
+                omega, omega_dot = data[:, 3], data[:, 4] if self._with_rate else None
+            rec = _record(data[:, 0], data[:, 1], data[:, 2], omega, omega_dot)
+            est = self._fit(rec)
         except NotIdentifiable as exc:
             self.estimate, self.error, self.reason = None, exc, exc.reason
             return None
         self.estimate, self.error, self.reason = est, None, ''
         self._warm = (est.natural_frequency**2,
                       2 * est.damping_ratio * est.natural_frequency)
+        if 'eccentricity' not in est.fixed and (
+                self._eccentricity is None
+                or est.eccentricity_std < self._eccentricity.eccentricity_std):
+            self._eccentricity = est
         return est
+
+    def _fit(self, rec: _Record) -> RigEstimate:
+        """The window's estimate.
+
+        From an accelerometer whose bias this window cannot tell from r0 (w nearly
+        constant): r0 is taken from the earlier window that determined it best (its
+        value and standard deviation; 'eccentricity' in ``fixed``), and the rest is
+        identified.
+        """
+        fit = functools.partial(_fit, rec, self.zeta, limits=self.limits, warm=self._warm,
+                                max_iterations=self.warm_iterations, work=self._work,
+                                sensor=self.sensor)
+        try:
+            return fit(r0=self.r0)
+        except NotIdentifiable as exc:
+            best = self._eccentricity
+            if self.sensor is None or not self.sensor.bias or best is None \
+                    or exc.parameters != ('eccentricity',):
+                raise
+            est = fit(r0=best.eccentricity)
+            covariance = est.covariance.copy()
+            covariance[1, 1] = best.eccentricity_std**2
+            return dataclasses.replace(est, eccentricity_std=best.eccentricity_std,
+                                       covariance=covariance)
 
     def _trim(self, newest):
         oldest = newest - self.window + 0.5 * self.sample_interval

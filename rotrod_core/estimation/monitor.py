@@ -4,8 +4,9 @@ The rig's natural frequency, eccentricity and damping are identified over a slid
 window, with the critical speed they imply and how far the rig is from its nominal
 parameters (no ROS import; the ``rig_monitor`` node is a thin front end).
 
-:class:`RigMonitor` takes the hub's angular velocity and the tip deflection as they
-come (from the simulator or a real rig's sensors, joined on their timestamps), feeds
+:class:`RigMonitor` takes the hub's angular velocity (or an encoder's angle) and the tip
+deflection (or the tip IMU's acceleration) as they come (from the simulator or a real
+rig's sensors, joined on their timestamps), feeds
 :class:`~rotrod_core.estimation.identify.RigIdentifier`, and judges the latest estimate: WARN when
 |w| comes within ``critical_margin`` of the identified quasi-static critical speed for
 ``deflection_limit`` (docs/model.md#eq-critical), or when the identified tip stiffness
@@ -18,7 +19,12 @@ import math
 from collections import OrderedDict
 from dataclasses import dataclass
 
-from rotrod_core.estimation.identify import RigEstimate, RigIdentifier
+from rotrod_core.estimation.identify import (
+    HUB_INPUTS,
+    Accelerometer,
+    RigEstimate,
+    RigIdentifier,
+)
 from rotrod_core.live.engine import OK, WARN, Health
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import finite_number
@@ -34,7 +40,12 @@ ESTIMATE_FIELDS = (
 """The published estimate, in this order, with units: w0, r0, zeta and their standard
 deviations; the quasi-static and sudden-start critical speeds for ``deflection_limit``;
 the tip stiffness w0^2 M (M the nominal modal mass) and its relative deviation from the
-nominal stiffness; the fit's residual; the time of the window's last sample."""
+nominal stiffness; the fit's residual (in m/s^2 from the acceleration); the time of the
+window's last sample."""
+
+MEASUREMENTS = ('deflection', 'acceleration')
+"""What the monitor measures at the tip: the deflection (m) or the IMU's acceleration
+(m/s^2, :class:`~rotrod_core.estimation.identify.Accelerometer`)."""
 
 PENDING = 64
 """Samples waiting for their partner (the other topic at the same stamp), at most."""
@@ -53,6 +64,12 @@ class MonitorConfig:
         deflection_limit: the critical deflection behind the critical speed, m.
         critical_margin: WARN when |w| >= (1 - margin) x the identified critical speed.
         stiffness_tolerance: WARN when |k_identified / k_nominal - 1| exceeds it.
+        measurement: 'deflection' (tip deflection u, v in m) or 'acceleration' (the tip
+            IMU's x, y in m/s^2, its tilt and radius from ``nominal``: gravity, rod
+            length and masses).
+        hub: 'omega' (the hub's angular velocity) or 'angle' (an encoder's angle, w and
+            w' fitted from it over ``angle_smoothing`` s; evenly spaced samples).
+        angle_smoothing: the span of that fit, s.
     """
 
     nominal: RodParams = RodParams()
@@ -62,8 +79,17 @@ class MonitorConfig:
     deflection_limit: float = 0.003
     critical_margin: float = 0.1
     stiffness_tolerance: float = 0.05
+    measurement: str = 'deflection'
+    hub: str = 'omega'
+    angle_smoothing: float = 0.2
 
     def __post_init__(self):
+        if self.measurement not in MEASUREMENTS:
+            raise ValueError(f'measurement must be one of {MEASUREMENTS}, got '
+                             f'{self.measurement!r}')
+        if self.hub not in HUB_INPUTS:
+            raise ValueError(f'hub must be one of {HUB_INPUTS}, got {self.hub!r}')
+        finite_number('angle_smoothing', self.angle_smoothing, positive=True)
         if not isinstance(self.nominal, RodParams) or self.nominal.is_batch:
             raise ValueError('nominal must be the RodParams of one rig')
         if not self.nominal.is_isotropic:
@@ -82,7 +108,10 @@ class RigMonitor:
     def __init__(self, config: MonitorConfig | None = None):
         self.config = config if config is not None else MonitorConfig()
         c = self.config
-        self.identifier = RigIdentifier(c.window, c.sample_interval, c.update_interval)
+        sensor = Accelerometer.of(c.nominal) if c.measurement == 'acceleration' else None
+        self.identifier = RigIdentifier(c.window, c.sample_interval, c.update_interval,
+                                        sensor=sensor, hub=c.hub,
+                                        angle_smoothing=c.angle_smoothing)
         self._omega: OrderedDict = OrderedDict()
         self._deflection: OrderedDict = OrderedDict()
         self.omega = 0.0
@@ -91,12 +120,43 @@ class RigMonitor:
 
     def add_omega(self, t: float, omega: float) -> RigEstimate | None:
         """The hub's angular velocity (rad/s) at time ``t`` (s); an estimate if one is due."""
-        self.omega = float(omega)
-        return self._add(self._omega, self._deflection, t, (float(omega),))
+        self._expect('hub', 'omega')
+        estimate = self._add(self._omega, self._deflection, t, (float(omega),))
+        self.omega = float(omega)           # checked finite by _add
+        return estimate
+
+    def add_angle(self, t: float, angle: float, omega: float | None = None
+                  ) -> RigEstimate | None:
+        """The hub's angle (rad, e.g. an encoder's) at time ``t`` (s); an estimate if due.
+
+        ``omega`` (rad/s, e.g. the encoder's own speed) only updates :attr:`omega`, the
+        speed the critical-speed warning compares.
+        """
+        self._expect('hub', 'angle')
+        if omega is not None and not math.isfinite(omega):
+            raise ValueError(f'non-finite hub speed at t = {t!r}: {omega!r}')
+        estimate = self._add(self._omega, self._deflection, t, (float(angle),))
+        if omega is not None:
+            self.omega = float(omega)
+        return estimate
 
     def add_deflection(self, t: float, u: float, v: float) -> RigEstimate | None:
         """The tip deflection (m) at time ``t`` (s); an estimate if one is due."""
+        self._expect('measurement', 'deflection')
         return self._add(self._deflection, self._omega, t, (float(u), float(v)))
+
+    def add_acceleration(self, t: float, x: float, y: float) -> RigEstimate | None:
+        """The tip IMU's acceleration x, y (m/s^2, its frame) at ``t`` (s).
+
+        An estimate if one is due.
+        """
+        self._expect('measurement', 'acceleration')
+        return self._add(self._deflection, self._omega, t, (float(x), float(y)))
+
+    def _expect(self, what: str, value: str) -> None:
+        if getattr(self.config, what) != value:
+            raise ValueError(f'this monitor takes {what} {getattr(self.config, what)!r}, '
+                             f'not {value!r}')
 
     def _add(self, mine, other, t, values):
         t = float(t)
@@ -126,6 +186,13 @@ class RigMonitor:
     def estimate(self) -> RigEstimate | None:
         """The latest estimate (None before the first and after a failed update)."""
         return self.identifier.estimate
+
+    @property
+    def units(self) -> tuple[tuple[str, str], ...]:
+        """:data:`ESTIMATE_FIELDS` with the residual in the measurement's unit."""
+        if self.config.measurement == 'deflection':
+            return ESTIMATE_FIELDS
+        return tuple((n, 'm/s^2' if n == 'residual_rms' else u) for n, u in ESTIMATE_FIELDS)
 
     def values(self, estimate: RigEstimate) -> tuple[float, ...]:
         """The published numbers of ``estimate``, in :data:`ESTIMATE_FIELDS` order."""
@@ -165,7 +232,8 @@ class RigMonitor:
         if est is None:
             why = self.identifier.reason or 'the window is filling'
             return Health(WARN, f'no estimate: {why}', nominal)
-        values = tuple(zip((f'{n}_{u.replace("/", "_")}' for n, u in ESTIMATE_FIELDS),
+        values = tuple(zip((f'{n}_{u.replace("/", "_").replace("^", "")}'
+                            for n, u in self.units),
                            self.values(est), strict=True))
         named = dict(zip((n for n, _ in ESTIMATE_FIELDS), self.values(est), strict=True))
         warnings = []
@@ -187,4 +255,4 @@ class RigMonitor:
         return Health(level, message, (*values, *nominal))
 
 
-__all__ = ['ESTIMATE_FIELDS', 'MonitorConfig', 'RigMonitor']
+__all__ = ['ESTIMATE_FIELDS', 'MEASUREMENTS', 'MonitorConfig', 'RigMonitor']

@@ -20,7 +20,9 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
@@ -44,6 +46,7 @@ from rotrod_core.command.trajectory import (
     TrajectoryPoint,
     TrajectoryRejected,
 )
+from rotrod_core.live.drive import FOLLOWS_OMEGA
 from rotrod_core.live.execution import (
     CANCELED,
     Tracking,
@@ -65,7 +68,7 @@ from rotrod_core.model.kinematics import TipMotion, tip_motion
 from rotrod_core.model.params import RodParams
 from rotrod_core.numerics.checks import NonFiniteStateError, finite_number
 
-DRIVES = ('velocity', 'torque')
+DRIVES = ('velocity', 'torque', 'servo')
 
 OK, WARN, ERROR = 0, 1, 2
 """Health levels (the values of diagnostic_msgs/DiagnosticStatus)."""
@@ -126,7 +129,9 @@ class EngineConfig:
 
     Attributes:
         params: the rod (one system).
-        drive: ``'velocity'`` (w follows setpoints) or ``'torque'`` (free rotation).
+        drive: ``'velocity'`` (w follows setpoints: an ideal drive), ``'torque'``
+            (free rotation under the commanded torque) or ``'servo'`` (a PI speed loop
+            with a torque limit follows the setpoints, :mod:`rotrod_core.live.drive`).
         coupling: ``'exact'`` or ``'paper'`` (see :mod:`rotrod_core.model.equations`).
         physics_rate: fixed integration rate, Hz (step dt = 1 / physics_rate).
         max_angular_acceleration: bound on |w'| when following setpoints, rad/s^2.
@@ -138,7 +143,13 @@ class EngineConfig:
         max_omega: largest |w| accepted as a setpoint, and reached in torque drive
             before the simulation halts, rad/s. The step is sized for it (see
             ``physics_rate``), so beyond it the integration is not trusted.
-        max_torque: largest |Q| accepted as a torque command, N m.
+        max_torque: largest |Q| accepted as a torque command, N m; the servo's
+            torque limit.
+        servo_bandwidth: the servo's closed-loop natural frequency for a rigid hub, Hz
+            (> 0, at most half the physics rate).
+        servo_damping: the servo's closed-loop damping ratio (> 0).
+        bearing_viscous_friction: the hub bearing's viscous friction c, N m s/rad.
+        bearing_coulomb_friction: the hub bearing's Coulomb friction Q_c, N m.
         deflection_limit: the critical deflection, m (the paper's 3 mm, the
             criterion behind its critical speed): while |r| = sqrt(u^2 + v^2) is
             beyond it, health is ERROR ("beyond the critical deflection"), naming
@@ -179,6 +190,10 @@ class EngineConfig:
     setpoint_delay: float = 0.05
     initial: tuple = ()
     command_timeout: float = 0.0
+    servo_bandwidth: float = 5.0
+    servo_damping: float = 1.0
+    bearing_viscous_friction: float = 0.0
+    bearing_coulomb_friction: float = 0.0
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -192,7 +207,14 @@ class EngineConfig:
         for name in ('physics_rate', 'max_angular_acceleration', 'max_omega', 'max_torque',
                      'deflection_limit', 'warn_fraction'):
             set_(self, name, finite_number(name, getattr(self, name), positive=True))
-        for name in ('critical_margin', 'max_deflection_ratio'):
+        for name in ('servo_bandwidth', 'servo_damping'):
+            set_(self, name, finite_number(name, getattr(self, name), positive=True))
+        if self.servo_bandwidth > 0.5 * self.physics_rate:
+            raise ValueError(f'servo_bandwidth {self.servo_bandwidth:g} Hz is beyond half the '
+                             f'physics rate ({0.5 * self.physics_rate:g} Hz): a loop closed '
+                             'at the physics rate cannot have it')
+        for name in ('critical_margin', 'max_deflection_ratio', 'bearing_viscous_friction',
+                     'bearing_coulomb_friction'):
             set_(self, name, finite_number(name, getattr(self, name), nonnegative=True))
         if self.max_deflection_ratio > 1:
             raise ValueError(f'max_deflection_ratio must be in [0, 1] (|r| / rod length; '
@@ -239,7 +261,7 @@ class EngineConfig:
                              f'{self.initial!r}') from None
         state = make_state(initial, scalar=True)
         set_(self, 'initial', tuple(sorted((k, float(v)) for k, v in initial.items())))
-        if self.drive == 'torque':
+        if self.drive != 'velocity':
             check_rotary_inertia(self.params, self.coupling, state)
         if abs(float(state.omega)) > self.max_omega:
             raise ValueError(f'initial omega {state.omega:g} rad/s exceeds max_omega '
@@ -369,8 +391,10 @@ class SimulationEngine:
                                            omega=float(self.state.omega), time=self.time)
         self._torque_schedule: deque = deque()
         self.torque_command = 0.0
-        self._torque = (0.0 if cfg.drive == 'torque' else float(model.hub_torque(
+        self._torque = (0.0 if cfg.drive != 'velocity' else float(model.hub_torque(
             self._coefficients, self._state, 0.0, cfg.coupling)))
+        self._servo_integral = 0.0
+        """The servo's integral term, N m (servo drive; carried from block to block)."""
         self._omega_dot = 0.0
         self._restart_timer()
 
@@ -416,6 +440,11 @@ class SimulationEngine:
         must supply to impose w'.
         """
         return self._torque
+
+    @property
+    def coefficients(self) -> Coefficients:
+        """The equations' coefficients of the rod in use."""
+        return self._coefficients
 
     @property
     def omega_dot(self) -> float:
@@ -530,7 +559,7 @@ class SimulationEngine:
             self._reject(str(exc))
         if abs(x) > limit:
             self._reject(f'{name} {x:g} {unit} exceeds the limit {limit:g} {unit}')
-        if self.config.drive != drive:
+        if self.config.drive not in (FOLLOWS_OMEGA if drive == 'velocity' else (drive,)):
             self._reject(f'{name} ignored: drive is {self.config.drive!r} '
                          f'(set drive to {drive!r} to use it)')
         if self.halted:
@@ -570,10 +599,10 @@ class SimulationEngine:
         is an outcome in :attr:`trajectory_outcomes`, as is the goal's end.
         """
         t = self._command_time(at)
-        if self.config.drive != 'velocity':
+        if self.config.drive not in FOLLOWS_OMEGA:
             self._outcome(goal, INVALID_GOAL, f'the drive is {self.config.drive!r}: a '
-                          'trajectory of the hub needs the velocity drive (set drive to '
-                          "'velocity')")
+                          'trajectory of the hub needs the velocity or servo drive (set '
+                          "drive to 'velocity' or 'servo')")
             return
         if self.halted:
             self._outcome(goal, INVALID_GOAL, f'the simulation is halted ({self.halted}); '
@@ -707,7 +736,7 @@ class SimulationEngine:
             return None
         dt = self.config.dt
         deadline = self._last_command + timeout
-        if self.config.drive == 'velocity':
+        if self.config.drive in FOLLOWS_OMEGA:
             if deadline > t0 + steps * dt:
                 return None
             self.timed_out_at = max(deadline, t0)
@@ -761,7 +790,7 @@ class SimulationEngine:
         dt = self.config.dt
         torque = self.torque_command                     # torque drive, before a timeout
         timeout = self._timeout_step(t0, steps)
-        if self.config.drive == 'velocity':
+        if self.config.drive in FOLLOWS_OMEGA:
             ex = self.execution
             if ex is not None:
                 times = t0 + dt * np.arange(1, steps + 1)
@@ -934,7 +963,7 @@ class SimulationEngine:
                 or config.setpoint_delay != old.setpoint_delay):
             self._reset_commands()
         elif config.command_timeout != old.command_timeout:
-            if self.timed_out_at is not None and config.drive == 'velocity':
+            if self.timed_out_at is not None and config.drive in FOLLOWS_OMEGA:
                 self._shaper.ramp_to(self._shaper.omega(time), time)    # hold w here
             self._restart_timer()
         if config.deflection_limit != old.deflection_limit:
@@ -995,17 +1024,38 @@ class SimulationEngine:
         """
         if self.halted:
             return ERROR, self.halted
+        reasons = self._reasons()
+        errors = [text() for level, text in reasons if level == ERROR]
+        warnings = [text() for level, text in reasons if level == WARN]
+        if errors:
+            return ERROR, '; '.join(errors + warnings)
+        if warnings:
+            return WARN, '; '.join(warnings)
+        return OK, 'running'
+
+    def level(self) -> int:
+        """The level of :meth:`condition`, its message not written.
+
+        Cheaper still: a world looks at every rod's level several times a second.
+        """
+        if self.halted:
+            return ERROR
+        return max((level for level, _ in self._reasons()), default=OK)
+
+    def _reasons(self) -> list[tuple[int, Callable[[], str]]]:
+        """Each reason for a level above OK but a halt: (level, its text when asked)."""
         cfg = self.config
         omega = float(self.state.omega)
         r, w = self.deflection, abs(omega)
-        errors, warnings = [], []
-        if self.beyond_limit_since is not None:
-            errors.append(
+        reasons: list[tuple[int, Callable[[], str]]] = []
+        beyond = self.beyond_limit_since is not None
+        if beyond:
+            reasons.append((ERROR, lambda: (
                 f'deflection {r * 1e3:.4g} mm beyond the critical deflection '
                 f'{cfg.deflection_limit * 1e3:.4g} mm (deflection_limit) since '
                 f't = {self.beyond_limit_since:.3f} s; first crossed at '
                 f't = {self.first_crossed_at:.3f} s, peak {self.peak_deflection * 1e3:.4g} mm '
-                f'at t = {self.peak_deflection_at:.3f} s; still running')
+                f'at t = {self.peak_deflection_at:.3f} s; still running')))
         if self.timed_out_at is not None:
             if cfg.drive == 'torque':
                 action = 'hub torque 0, coasting'
@@ -1013,24 +1063,25 @@ class SimulationEngine:
                 action = 'spinning down'
             else:
                 action = 'spun down, at rest'
-            warnings.append(f'no command for {self.command_age:.3g} s (command_timeout '
-                            f'{cfg.command_timeout:g} s): {action}')
-        if r > cfg.warn_fraction * cfg.deflection_limit and not errors:
-            warnings.append(f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
-                            f'the {cfg.deflection_limit * 1e3:.3g} mm limit')
+            reasons.append((WARN, lambda: (
+                f'no command for {self.command_age:.3g} s (command_timeout '
+                f'{cfg.command_timeout:g} s): {action}')))
+        if r > cfg.warn_fraction * cfg.deflection_limit and not beyond:
+            reasons.append((WARN, lambda: (
+                f'deflection {r * 1e3:.3g} mm above {cfg.warn_fraction:.0%} of '
+                f'the {cfg.deflection_limit * 1e3:.3g} mm limit')))
         for name, wc in self.critical_speeds.items():
             if abs(w - wc) <= cfg.critical_margin * wc:
-                warnings.append(f'|omega| {w:.4g} rad/s within {cfg.critical_margin:.0%} of '
-                                f'the critical speed {wc:.4g} rad/s '
-                                f'({name.replace("_", " ")})')
+                reasons.append((WARN, partial(_near_critical, w, wc, cfg.critical_margin, name)))
         if not self.stable_at(omega):
-            warnings.append(f'omega {omega:.4g} rad/s is in an unstable range: '
-                            'the free vibration grows')
-        if errors:
-            return ERROR, '; '.join(errors + warnings)
-        if warnings:
-            return WARN, '; '.join(warnings)
-        return OK, 'running'
+            reasons.append((WARN, lambda: (f'omega {omega:.4g} rad/s is in an unstable '
+                                           'range: the free vibration grows')))
+        return reasons
+
+
+def _near_critical(w: float, wc: float, margin: float, name: str) -> str:
+    return (f'|omega| {w:.4g} rad/s within {margin:.0%} of the critical speed {wc:.4g} '
+            f'rad/s ({name.replace("_", " ")})')
 
 
 __all__ = ['CommandRejected', 'DRIVES', 'ERROR', 'EngineConfig', 'Health',

@@ -30,15 +30,18 @@ snapshot)`` and ``publish_status(status)`` with plain values (SI units, stamps i
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 import traceback
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Generic, NamedTuple, TypeVar
+from typing import Any, Generic, NamedTuple, TypeVar
 
 import rotrod_core.live.scheduling as scheduling
 from rotrod_core.command.trajectory import INVALID_GOAL
+from rotrod_core.live.drive import FOLLOWS_OMEGA
 from rotrod_core.live.engine import ERROR, CommandRejected, SimulationEngine
 from rotrod_core.live.execution import Tracking, TrajectoryOutcome
 from rotrod_core.live.lockstep import (
@@ -178,6 +181,8 @@ class Sample(NamedTuple):
     """The executing trajectory's desired and actual hub state (None: no goal)."""
     rod: str = ''
     """The rod's name in its world."""
+    omega_dot: float = 0.0
+    """The hub's angular acceleration over the last step, rad/s^2."""
 
 
 class Status(NamedTuple):
@@ -214,6 +219,25 @@ class SystemClock:
         while time.monotonic() < due:
             pass
         return True
+
+
+def _follow_rods(per_rod: dict, engines, first: Callable[[int, int], Any]) -> list:
+    """Keep ``per_rod`` (a value per rod name) to the rods of ``engines``.
+
+    A rod new to it gets ``first(k, n)``, k its place among the n rods (so that the
+    rods' periodic work falls on different instants); the rods that left are dropped,
+    and their names returned.
+    """
+    if len(per_rod) == len(engines) and all(name in per_rod for name in engines):
+        return []
+    n = len(engines)
+    for k, name in enumerate(engines):
+        if name not in per_rod:
+            per_rod[name] = first(k, n)
+    gone = [name for name in per_rod if name not in engines]
+    for name in gone:
+        del per_rod[name]
+    return gone
 
 
 class RealTimeLoop(Generic[SettingsT]):
@@ -287,8 +311,8 @@ class RealTimeLoop(Generic[SettingsT]):
         self._stamps = StampClock(0.0 if settings.publishes_clock else self.clock.epoch())
         self._countdown = 0
         self._published = (self.world.time, now)  # (simulated, wall) of the last publication
-        self._samples_since_marker = 0
-        self._next_marker_wall = 0.0
+        self._marker_state: dict[str, list] = {}
+        """Each rod's [samples since its markers, wall time of its next markers]."""
         self._commands: deque = deque(maxlen=PENDING_COMMANDS)
         self._command_arrived = threading.Event()
         self.dropped_commands = 0
@@ -298,7 +322,10 @@ class RealTimeLoop(Generic[SettingsT]):
         self._late_logged: dict[str, int] = {}
         self._timeouts_logged = {name: e.timeouts for name, e in self.world.engines.items()}
         self._halts_logged: dict[str, str | None] = {}
-        self._last_levels: tuple = ()
+        self._levels: dict[str, int] = {}
+        """Each rod's level at its last look."""
+        self._status_due: dict[str, float] = {}
+        """Each rod's next periodic status (monotonic wall time, s)."""
         self._next_status = 0.0
         self._next_level_check = 0.0
         self._quiet_until: dict = {}
@@ -524,9 +551,9 @@ class RealTimeLoop(Generic[SettingsT]):
                 continue
             cfg = eng.config
             action = (f'spinning down to 0 at max_angular_acceleration '
-                      f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive == 'velocity'
+                      f'{cfg.max_angular_acceleration:g} rad/s^2' if cfg.drive in FOLLOWS_OMEGA
                       else 'hub torque set to 0 (free coast)')
-            kind = 'omega' if cfg.drive == 'velocity' else 'torque'
+            kind = 'omega' if cfg.drive in FOLLOWS_OMEGA else 'torque'
             self._log('warning', self._named(eng, f'no command on {self._inputs[kind]} for '
                       f'{cfg.command_timeout:g} s (command_timeout) at simulated time '
                       f'{eng.timed_out_at:.3f} s: {action}'), 'timeout ' + name, 1.0)
@@ -787,24 +814,39 @@ class RealTimeLoop(Generic[SettingsT]):
         # after it (estimate, status) must not delay it
         return wake is None or self._idle_until(wake)
 
+    def _markers_due(self, engines) -> set:
+        """The rods whose sample of now carries markers.
+
+        Each rod's every ``_marker_every`` samples, the k-th rod of a world's k samples
+        before the first rod's (modulo that), so that the rods' marker arrays (a few
+        hundred us each) do not all fall on one sample.
+        """
+        every, state = self._marker_every, self._marker_state
+        _follow_rods(state, engines, lambda k, n: [-k % every, 0.0])
+        now, due = None, set()
+        for name in engines:
+            rod = state[name]
+            rod[0] += 1
+            if rod[0] >= every:
+                # a viewer shows markers in wall time: faster than real time, at most
+                # twice marker_rate per wall second (as fast as possible, markers every
+                # 10 ms of simulated time cost a third of the speed)
+                now = self.clock.monotonic() if now is None else now
+                if now >= rod[1]:
+                    rod[0], rod[1] = 0, now + 0.5 / self.settings.marker_rate
+                    due.add(name)
+        return due
+
     def _samples(self) -> list[Sample]:
         """Every running rod's sample of now (a halted rod's too while others run)."""
-        self._samples_since_marker += 1
-        markers = self.settings.markers and self._samples_since_marker >= self._marker_every
-        if markers:
-            # a viewer shows markers in wall time: faster than real time, at most twice
-            # marker_rate per wall second (as fast as possible, markers every 10 ms of
-            # simulated time cost a third of the speed)
-            now = self.clock.monotonic()
-            markers = now >= self._next_marker_wall
-            if markers:
-                self._samples_since_marker = 0
-                self._next_marker_wall = now + 0.5 / self.settings.marker_rate
+        engines = self.world.engines
+        markers = self._markers_due(engines) if self.settings.markers else {}
         t = self.world.time
         due = self._pacer.wall_time(t) if self._pacer.paced and not self.paused else None
         stamp = self._stamps.stamp(t)
         return [Sample(due, t, stamp, eng.state, eng.torque, eng.frequencies(),
-                       eng.inertial_position(), markers, eng.tracking(), name)
+                       eng.inertial_position(), name in markers, eng.tracking(), name,
+                       eng.omega_dot)
                 for name, eng in self.world.engines.items()]
 
     def _tick(self) -> tuple[list, float | None]:
@@ -883,9 +925,12 @@ class RealTimeLoop(Generic[SettingsT]):
 
     # ----------------------------------------------------------------- status
     def report(self, force: bool = False) -> None:
-        """Send every rod's :class:`Status` when due (diagnostics_rate) or ``force``.
+        """Send each rod's :class:`Status` when due (diagnostics_rate) or ``force``.
 
-        Between, the status of each rod whose level changed is sent.
+        Between, the status of each rod whose level changed is sent. The rods' periodic
+        statuses are spread over the period (rod k of n first at (k + 1) / n of it), not
+        sent together: a status costs ~0.2 ms to build and publish, and a hundred rods'
+        at one instant delayed that instant's and the next ones' samples by ~20 ms.
 
         The levels are looked at most every LEVEL_CHECK wall seconds per LEVEL_RODS
         rods (as fast as possible a cycle is one publication: thousands a second).
@@ -896,32 +941,44 @@ class RealTimeLoop(Generic[SettingsT]):
         now = self.clock.monotonic()
         if not force and now < self._next_level_check and now < self._next_status:
             return
-        self._next_level_check = now + LEVEL_CHECK * max(1.0, len(self.world) / LEVEL_RODS)
+        check = force or now >= self._next_level_check
+        if check:
+            self._next_level_check = now + LEVEL_CHECK * max(1.0, len(self.world) / LEVEL_RODS)
         with self.lock:
-            conditions = [(name, *e.condition()) for name, e in self.world.engines.items()]
-            if self.failure:
-                conditions = [(name, ERROR, self.failure) for name, _, _ in conditions]
-            elif self.paused:
-                conditions = [(name, level, 'paused; ' + message)
-                              for name, level, message in conditions]
-            levels = tuple((name, level) for name, level, _ in conditions)
-            now = self.clock.monotonic()
-            due = force or now >= self._next_status
-            if not due and levels == self._last_levels:
+            engines = self.world.engines
+            period = 1.0 / self.settings.diagnostics_rate
+            due_at = self._status_due
+            # a new rod's first periodic status (k + 1) / n of a period from now (its
+            # very first, a change of level from none, goes out at once)
+            for name in _follow_rods(due_at, engines,
+                                     lambda k, n: now + period * (k + 1) / n):
+                self._levels.pop(name, None)
+            sent = []
+            for name in engines:
+                due = now >= due_at[name]
+                if not (check or due):
+                    continue
+                level = ERROR if self.failure else engines[name].level()
+                if due:                 # its next in a period, on its own phase
+                    due_at[name] = max(due_at[name] + period, now)
+                if force or due or self._levels.get(name) != level:
+                    sent.append(name)
+                self._levels[name] = level
+            self._next_status = min(due_at.values(), default=math.inf)
+            if not sent:
                 return
-            if due:                     # every rod's status
-                self._next_status = now + 1.0 / self.settings.diagnostics_rate
-            else:                       # a level changed: the statuses of those that did
-                before = set(self._last_levels)
-                conditions = [c for c, key in zip(conditions, levels) if key not in before]
-            self._last_levels = levels
             loop_values = (('paused', self.paused),
                            ('real_time_factor', self.settings.real_time_factor),
                            ('overruns', self.overruns), ('publications', self.publications),
                            ('dropped_commands', self.dropped_commands),
                            ('malformed_commands', self.malformed_commands))
             stamp = self._stamps.stamp(self.world.time)
+            conditions = [(name, ERROR, self.failure) if self.failure
+                          else (name, *engines[name].condition()) for name in sent]
+            if self.paused and not self.failure:
+                conditions = [(name, level, 'paused; ' + message)
+                              for name, level, message in conditions]
             statuses = [Status(stamp, level, message,
-                               (*self.world.engines[name].status_values(), *loop_values), name)
+                               (*engines[name].status_values(), *loop_values), name)
                         for name, level, message in conditions]
         self._publish_status(statuses)

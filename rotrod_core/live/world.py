@@ -48,6 +48,13 @@ from typing import Any, Protocol
 import numpy as np
 
 import rotrod_core.model.equations as model
+from rotrod_core.live.drive import (
+    friction_torque,
+    overcome_friction,
+    rigid_inertia,
+    servo_gains,
+    servo_torque,
+)
 from rotrod_core.model.equations import Coefficients
 from rotrod_core.numerics.checks import finite_number
 from rotrod_core.numerics.rk4 import rk4_step, rk4_step_prescribed_rotation
@@ -164,17 +171,40 @@ class _Group:
         self._accelerations = partial(model.deflection_accelerations, self.co)
         self._torque_rates = partial(model.torque_drive_rates, self.co, coupling=coupling)
         self._maps: tuple | None = None     # a hold's affine maps (_run_prescribed)
+        # the bearing's friction and the servo (rotrod_core/live/drive.py), per rod
+        self.friction = any(c.bearing_viscous_friction or c.bearing_coulomb_friction
+                            for c in cfg)
+        self.viscous = self._column([c.bearing_viscous_friction for c in cfg])
+        self.coulomb = self._column([c.bearing_coulomb_friction for c in cfg])
+        self.inertia = self._column([float(rigid_inertia(e._coefficients)) for e in engines])
+        self.servo = drive == 'servo'
+        if self.servo:
+            gains = [servo_gains(e._coefficients, c.servo_bandwidth, c.servo_damping)
+                     for e, c in zip(engines, cfg)]
+            self.kp = self._column([float(g[0]) for g in gains])
+            self.ki = self._column([float(g[1]) for g in gains])
+            self.max_torque = self._column([c.max_torque for c in cfg])
+        self._integral: Any = 0.0
 
     def _column(self, values):
         return values[0] if self.single else np.array(values, dtype=float)
 
     def run(self, rows: list, times: np.ndarray, dt: float) -> list[BlockRecord]:
         """Take a step of dt (s) at each of ``times`` (their ends) under ``rows``."""
+        if self.servo:          # the PI loop's integral, from the rods and back
+            self._integral = self._column([e._servo_integral for e in self.engines])
+        self._stick = self.coulomb * dt / self.inertia
         if self.single:
-            return [self._run_one(_values(rows[0], times).tolist(), dt)]
-        if self.drive == 'velocity':
-            return self._run_prescribed(_matrix(rows, times), dt)
-        return self._run_many(_matrix(rows, times), dt)
+            records = [self._run_one(_values(rows[0], times).tolist(), dt)]
+        elif self.drive == 'velocity':
+            records = self._run_prescribed(_matrix(rows, times), dt)
+        else:
+            records = self._run_many(_matrix(rows, times), dt)
+        if self.servo:
+            for i, engine in enumerate(self.engines):
+                engine._servo_integral = float(self._integral if self.single
+                                               else self._integral[i])
+        return records
 
     def _step(self, state, value, dt: float):
         """One step of every rod: (new state, w', torque) under ``value`` per rod."""
@@ -183,10 +213,25 @@ class _Group:
             u, v, du, dv, theta, _ = rk4_step_prescribed_rotation(self._accelerations, state,
                                                                    dt, wd)
             new = (u, v, du, dv, theta, value)     # the drive imposes w: exactly its target
-            return new, wd, model.hub_torque(self.co, new, wd, self.coupling)
-        new = rk4_step(self._torque_rates, state, dt, value, value, value)
-        wd = model.hub_angular_acceleration(self.co, new, value, self.coupling)
-        return new, wd, value
+            torque = model.hub_torque(self.co, new, wd, self.coupling)
+            if self.friction:
+                torque = torque + overcome_friction(self.viscous, self.coulomb, value)
+            return new, wd, torque
+        applied = value                           # torque drive: the commanded torque
+        if self.servo:                             # servo: the PI loop's, from w now
+            applied, self._integral = servo_torque(self.kp, self.ki, self.max_torque,
+                                                   self._integral, value, state[5], dt)
+        net = applied
+        if self.friction:
+            # stiction holds the hub against the drive and the rod's reaction together
+            load = applied
+            if self.coupling == 'exact':
+                load = applied + model.rod_torque_on_hub(self.co, *state[:4])
+            net = applied + friction_torque(self.viscous, self.coulomb, self._stick, state[5],
+                                            load)
+        new = rk4_step(self._torque_rates, state, dt, net, net, net)
+        wd = model.hub_angular_acceleration(self.co, new, net, self.coupling)
+        return new, wd, applied
 
     def _run_one(self, values: list, dt: float) -> BlockRecord:
         """The block of a rod alone, in Python floats."""
@@ -262,6 +307,8 @@ class _Group:
                 xs[k], thetas[k] = x, theta
             new = (xs[:, 0], xs[:, 1], xs[:, 2], xs[:, 3], thetas, target)
             torque = model.hub_torque(self.co, new, wd, self.coupling)
+            if self.friction:
+                torque = torque + overcome_friction(self.viscous, self.coulomb, target)
             r = np.hypot(new[0], new[1])
             out_steps = np.stack([*new, wd, torque, r], axis=1)   # (steps, 9, rods)
             finite = np.isfinite(out_steps[:, :8].sum(axis=1))

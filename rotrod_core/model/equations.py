@@ -164,7 +164,7 @@ class Coefficients:
         extra = rod * (17.0 / 35.0 * m + 213.0 / 2240.0 * rod) / mm
         return cls(mass=m, eccentricity=r0, hub_inertia=hub, k1=k1, k2=k2, c1=c1, c2=c2,
                    w1sq=k1 / mm, w2sq=k2 / mm, g1=c1 / mm, g2=c2 / mm, modal_mass=mm,
-                   eccentric_mass=me, load_radius=r0 * (me / mm),
+                   eccentric_mass=me, load_radius=num(params.load_radius),
                    rotor_inertia=hub + extra * r0 * r0)
 
 

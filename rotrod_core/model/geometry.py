@@ -10,6 +10,8 @@ slightly from it, which a drawing does not show.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from rotrod_core.model.params import STEEL_DENSITY, RodParams
@@ -19,6 +21,30 @@ def cantilever_shape(s):
     """Deflection along a tip-loaded cantilever relative to the tip's, at s = z / l."""
     s = np.asarray(s, dtype=float)
     return s * s * (3.0 - s) / 2.0
+
+
+TIP_SLOPE = 1.5
+"""The cantilever shape's slope at the tip over the tip's deflection, times l:
+d/ds [s^2 (3 - s) / 2] at s = 1."""
+
+
+def tip_tilt(u: float, v: float, du: float, dv: float,
+             rod_length: float) -> tuple[float, float, float, float]:
+    """(a, b, a', b') of the tip's tangent for deflection (u, v) m, rates (u', v') m/s.
+
+    The tangent, (s_u, s_v, 1) with (s_u, s_v) = TIP_SLOPE (u, v) / l, is e_z turned by
+    Ry(a) Rx(-b): a = atan(s_u), b = atan2(s_v, sqrt(1 + s_u^2)) (rad); a', b' rad/s.
+    The frame of the mass (the IMU's, the URDF's ``tip``) is so tilted.
+    """
+    k = TIP_SLOPE / rod_length
+    su, sv, dsu, dsv = k * u, k * v, k * du, k * dv
+    h = math.sqrt(1.0 + su * su)
+    a = math.atan(su)
+    b = math.atan2(sv, h)
+    da = dsu / (1.0 + su * su)
+    dh = su * dsu / h
+    db = (h * dsv - sv * dh) / (h * h + sv * sv)
+    return a, b, da, db
 
 
 def rod_centerline(params: RodParams, u: float, v: float, theta: float, points: int = 12,

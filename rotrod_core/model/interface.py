@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 
+from rotrod_core.model.geometry import tip_tilt
+
 WORLD_FRAME = 'world'
 """The inertial frame: tip/position and the markers."""
 ROTOR_FRAME = 'rotor'
@@ -30,8 +32,14 @@ ROD_ROOT_FRAME = 'rod_root'
 """The rod's root on the disk, at (r0, 0, 0) in the rotor frame."""
 TIP_RADIAL_FRAME = 'tip_radial_link'
 """Between the two tip joints: at (r0 + u, 0, l) in the rotor frame."""
+TIP_TANGENTIAL_FRAME = 'tip_tangential_link'
+"""After the two tip joints: at (r0 + u, v, l) in the rotor frame, not tilted."""
+TIP_PITCH_FRAME = 'tip_pitch_link'
+"""Between the two tilt joints."""
 TIP_FRAME = 'tip'
-"""The mass: at (r0 + u, v, l) in the rotor frame."""
+"""The mass (and the IMU on it, tip/imu): at (r0 + u, v, l) in the rotor frame, tilted
+with the rod's tangent at the tip (z along it): Ry(a) Rx(-b) of the rotor's axes
+(:func:`rotrod_core.model.geometry.tip_tilt`)."""
 
 HUB_JOINT = 'hub'
 """Continuous joint world -> rotor about z: position theta rad, velocity w rad/s,
@@ -42,7 +50,12 @@ TIP_RADIAL_JOINT = 'tip_radial'
 """Prismatic joint along the rotor's x: position u m, velocity u' m/s."""
 TIP_TANGENTIAL_JOINT = 'tip_tangential'
 """Prismatic joint along the rotor's y: position v m, velocity v' m/s."""
-JOINT_NAMES = (HUB_JOINT, TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT)
+TIP_PITCH_JOINT = 'tip_pitch'
+"""Revolute joint about y: position a rad (the tip's tilt toward the radial), a' rad/s."""
+TIP_ROLL_JOINT = 'tip_roll'
+"""Revolute joint about x: position -b rad (the tilt toward the tangential), -b' rad/s."""
+JOINT_NAMES = (HUB_JOINT, TIP_RADIAL_JOINT, TIP_TANGENTIAL_JOINT, TIP_PITCH_JOINT,
+               TIP_ROLL_JOINT)
 """The joints in ``joint_states``, in this order."""
 
 INTERFACES_PACKAGE = 'rotrod_interfaces'
@@ -64,16 +77,20 @@ TOPICS = {
 with /) -> message type."""
 
 
-def joint_values(state, torque: float) -> tuple:
+def joint_values(state, torque: float, rod_length: float) -> tuple:
     """(positions, velocities, efforts) of :data:`JOINT_NAMES` for a state, SI units.
 
     ``state`` has u, v, du, dv, theta, omega (:class:`rotrod_core.model.equations.State`);
-    ``torque`` is the hub torque, N m. The tip joints are passive (the rod's elastic and
-    inertial forces are internal to the model): their effort is 0.
+    ``torque`` is the hub torque, N m; ``rod_length`` (m) sets the tip's tilt (the
+    tilt joints: a and -b of :func:`rotrod_core.model.geometry.tip_tilt`). The tip
+    joints are passive (the rod's elastic and inertial forces are internal to the
+    model): their effort is 0.
     """
-    return ((float(state.theta), float(state.u), float(state.v)),
-            (float(state.omega), float(state.du), float(state.dv)),
-            (float(torque), 0.0, 0.0))
+    u, v, du, dv = float(state.u), float(state.v), float(state.du), float(state.dv)
+    a, b, da, db = tip_tilt(u, v, du, dv, rod_length)
+    return ((float(state.theta), u, v, a, -b),
+            (float(state.omega), du, dv, da, -db),
+            (float(torque), 0.0, 0.0, 0.0, 0.0))
 
 
 def frequency_fields(omega: float, f1: float, f2: float) -> dict:

@@ -375,6 +375,15 @@ class RodParams:
         return self.mass + SHAPE_LOAD * self.rod_mass
 
     @property
+    def load_radius(self):
+        """The load radius re = (Me / M) r0, m.
+
+        The eccentric loads' radius per unit modal mass (w^2 re drives the bending
+        mode); exactly ``eccentricity`` for a massless rod (docs/real_rig.md).
+        """
+        return self.eccentricity * (self.eccentric_mass / self.modal_mass)
+
+    @property
     def tip_load(self):
         """Axial load of the tip mass on the rod, P = m g, N (> 0 compression)."""
         return self.mass * np.asarray(self.gravity, dtype=float) + 0.0

@@ -166,8 +166,8 @@ class _Messages:
         return self.make('geometry_msgs/msg/Point', x=float(xyz[0]), y=float(xyz[1]),
                          z=float(xyz[2]))
 
-    def joint_state(self, stamp, state: State, torque: float):
-        position, velocity, effort = interface.joint_values(state, torque)
+    def joint_state(self, stamp, state: State, torque: float, rod_length: float):
+        position, velocity, effort = interface.joint_values(state, torque, rod_length)
         return self.make('sensor_msgs/msg/JointState', header=self.header(stamp),
                          name=list(interface.JOINT_NAMES),
                          position=np.array(position), velocity=np.array(velocity),
@@ -287,7 +287,8 @@ def write_bag(path: str | Path, run, settings: PublicationSettings | None = None
             u, v, du, dv, theta, omega = (float(x[i]) for x in (run.u, run.v, run.du, run.dv,
                                                                 run.theta, run.omega))
             state = State(u, v, du, dv, theta, omega)
-            write('joint_states', ns, msgs.joint_state(stamp, state, float(run.torque[i])))
+            write('joint_states', ns, msgs.joint_state(stamp, state, float(run.torque[i]),
+                                                       height))
             write('tip/deflection', ns, msgs.deflection(stamp, u, v, rotor))
             write('tip/position', ns, msgs.position(stamp, (run.x[i], run.y[i], height),
                                                     world))

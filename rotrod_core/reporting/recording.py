@@ -51,6 +51,9 @@ OMEGA, TORQUE = 'timeseries/hub/omega', 'timeseries/hub/torque'
 STAGE = 'timeseries/hub/stage'
 F_MODEL, F_ESTIMATE = 'timeseries/frequencies/model', 'timeseries/frequencies/estimate'
 ROTATING_TIP, INERTIAL_TIP = 'rotating/tip', 'inertial/tip'
+IMU_ACCELERATION = 'timeseries/imu/linear_acceleration'
+IMU_ANGULAR_VELOCITY = 'timeseries/imu/angular_velocity'
+"""The tip IMU's readings (tip/imu), each three scalars: x, y, z of the sensor's frame."""
 EPOCH_THRESHOLD = 1e9
 """Stamps above this many seconds are wall-clock (epoch) times, below it simulated time."""
 
@@ -70,11 +73,18 @@ _EVENT_ENTITY = {'stage': STAGE, 'critical': CRITICAL, 'peak': PEAK}
 # buffers: one per kind of message, rows of floats, the stamp first
 _STATE, _POSE, _DEFLECTION, _POSITION = 'state', 'pose', 'deflection', 'position'
 _F_MODEL, _F_ESTIMATE = 'f_model', 'f_estimate'
+_IMU = 'imu'
+IMU_STYLE = {
+    IMU_ACCELERATION: ([f'specific force {a} [m/s^2]' for a in 'xyz'],
+                       [[31, 119, 180], [214, 39, 40], [44, 160, 44]]),
+    IMU_ANGULAR_VELOCITY: ([f'angular velocity {a} [rad/s]' for a in 'xyz'],
+                           [[140, 86, 75], [227, 119, 194], [127, 127, 127]]),
+}
 
 
-def blueprint(mech: Mechanism | None = None, timeline: str = TIMELINE):
+def blueprint(mech: Mechanism | None = None, timeline: str = TIMELINE, imu: bool = False):
     """The default layout, a ``rerun.blueprint.Blueprint`` (see recording_layout)."""
-    return _layout(mech or Mechanism(), timeline)
+    return _layout(mech or Mechanism(), timeline, imu)
 
 
 class RecordingWriter:
@@ -108,7 +118,7 @@ class RecordingWriter:
     def __init__(self, path: str | Path, *, application_id: str = 'rotrod',
                  serve_port: int | None = None, pretrigger: float | None = None,
                  mechanism: Mechanism | None = None, origin: float | None = None,
-                 footer: bool = True):
+                 footer: bool = True, imu: bool = False):
         if pretrigger is not None and not (math.isfinite(pretrigger) and pretrigger >= 0):
             raise ValueError(f'pretrigger must be a finite number of seconds >= 0, got '
                              f'{pretrigger!r}')
@@ -131,7 +141,7 @@ class RecordingWriter:
             self.serve_uri = server.uri
         # the profile's timeline where every sample will be on it
         timeline = PROFILE_TIMELINE if (origin is not None or self.armed) else TIMELINE
-        self.rec.set_sinks(*sinks, default_blueprint=blueprint(self.mechanism, timeline))
+        self.rec.set_sinks(*sinks, default_blueprint=blueprint(self.mechanism, timeline, imu))
         for entity, (name, color) in SERIES_STYLE.items():
             self.rec.log(entity, rr.SeriesLines(names=name, colors=[color]), static=True)
         for entity, (name, color, marker) in MARKER_STYLE.items():
@@ -144,9 +154,12 @@ class RecordingWriter:
                          static=True)
         self.rec.log(ROTATING_TIP, rr.Points2D.from_fields(radii=-4.0, colors=[[255, 255, 255]]),
                      static=True)
+        if imu:
+            for entity, (names, colors) in IMU_STYLE.items():
+                self.rec.log(entity, rr.SeriesLines(names=names, colors=colors), static=True)
         scene3d.log_static(self.rec, rr, self.mechanism)
         self._buffers: dict[str, list] = {k: [] for k in (
-            _STATE, _POSE, _DEFLECTION, _POSITION, _F_MODEL, _F_ESTIMATE)}
+            _STATE, _POSE, _DEFLECTION, _POSITION, _F_MODEL, _F_ESTIMATE, _IMU)}
         self._events: list[tuple[float, str, str]] = []     # (t, level, text), unsent
         self._markers: dict[str, list] = {e: [] for e in MARKER_STYLE}
         self._path_rows: list = []        # arrays of (t, u, v) rows waiting for their stage
@@ -224,6 +237,15 @@ class RecordingWriter:
         """Dynamic frequencies (Hz), from the model or estimated, at time ``t`` (s)."""
         self._stamp(t)
         self._buffers[_F_ESTIMATE if estimate else _F_MODEL].append((t, f1, f2))
+
+    def add_imu(self, t: float, acceleration, angular_velocity) -> None:
+        """The tip IMU's reading at stamp time ``t`` (s).
+
+        The specific force (m/s^2) and the angular velocity (rad/s), each (x, y, z) in
+        the sensor's frame.
+        """
+        self._stamp(t)
+        self._buffers[_IMU].append((t, *acceleration, *angular_velocity))
 
     def event(self, t: float, text: str, level: str = 'INFO') -> None:
         """A text entry in ``events`` at stamp time ``t`` (s) (e.g. a halt: 'ERROR')."""
@@ -321,6 +343,13 @@ class RecordingWriter:
                 a = np.array(b[key], dtype=float)
                 send(entity, self._index(a[:, 0]), rr.Scalars.columns(
                     scalars=a[:, 1:3]).partition(np.full(len(a), 2, dtype=np.int32)))
+        if b[_IMU]:
+            a = np.array(b[_IMU], dtype=float)
+            index, three = self._index(a[:, 0]), np.full(len(a), 3, dtype=np.int32)
+            send(IMU_ACCELERATION, index,
+                 rr.Scalars.columns(scalars=a[:, 1:4]).partition(three))
+            send(IMU_ANGULAR_VELOCITY, index,
+                 rr.Scalars.columns(scalars=a[:, 4:7]).partition(three))
         for rows in b.values():
             rows.clear()
         for entity, marks in self._markers.items():

@@ -29,8 +29,11 @@ EVENTS = 'events'
 """TextLog: stage changes, the critical deflection, halts."""
 
 
-def blueprint(mech: Mechanism, timeline: str = TIMELINE):
-    """The default layout, a ``rerun.blueprint.Blueprint``, on ``timeline``."""
+def blueprint(mech: Mechanism, timeline: str = TIMELINE, imu: bool = False):
+    """The default layout, a ``rerun.blueprint.Blueprint``, on ``timeline``.
+
+    With ``imu``, a panel of the tip IMU's readings below the frequencies.
+    """
     import rerun as rr
     import rerun.blueprint as rrb
 
@@ -54,18 +57,24 @@ def blueprint(mech: Mechanism, timeline: str = TIMELINE):
     whole = rrb.Spatial2DView(origin=ROTATING, name=f'tip path (u, v) in the rotating frame '
                                                     f'[m]: {colours}',
                               overrides=paths)
+    series = [
+        rrb.TimeSeriesView(origin='timeseries/deflection',
+                           name=f'tip deflection u, v, |r| [m] vs {zero} [s]'),
+        rrb.TimeSeriesView(origin='timeseries/hub',
+                           name='hub: omega [rad/s], torque [N m]; stage changes'),
+        rrb.TimeSeriesView(origin='timeseries/frequencies',
+                           name='dynamic frequencies f1, f2 [Hz]')]
+    if imu:
+        series.append(rrb.TimeSeriesView(
+            origin='timeseries/imu', name='tip IMU (tip/imu, its tilted frame): specific '
+                                          'force [m/s^2], angular velocity [rad/s]'))
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(mechanism, whole, row_shares=[1, 1]),
             rrb.Vertical(
-                rrb.TimeSeriesView(origin='timeseries/deflection',
-                                   name=f'tip deflection u, v, |r| [m] vs {zero} [s]'),
-                rrb.TimeSeriesView(origin='timeseries/hub',
-                                   name='hub: omega [rad/s], torque [N m]; stage changes'),
-                rrb.TimeSeriesView(origin='timeseries/frequencies',
-                                   name='dynamic frequencies f1, f2 [Hz]'),
+                *series,
                 rrb.TextLogView(origin=EVENTS, name=f'events ({zero})'),
-                row_shares=[3, 3, 3, 2]),
+                row_shares=[3] * len(series) + [2]),
             column_shares=[1, 1],
         ),
         rrb.TimePanel(timeline=timeline, play_state='following', state='collapsed'),

@@ -393,6 +393,7 @@ REQUESTS = 1500
 in a fixed time, which a loaded machine answered too few of (about 640 a second here)."""
 
 
+@pytest.mark.long       # 16 s of stress: in CI's long run, to keep the default run under 15 min
 def test_parameter_updates_hammered_while_stepping_take_effect_or_are_refused(
         ros_processes, ros_node, request):
     ns = namespace(request)

@@ -100,6 +100,7 @@ def test_an_as_fast_as_possible_run_is_in_the_recording_to_the_last_sample(
     assert t_end - t_e[-1] < 0.5 * (1.0 - STEP) + 0.1 + 1e-9
 
 
+@pytest.mark.long      # waits the 10 s timeout: CI's long run (the default run's budget)
 def test_as_fast_as_possible_without_a_subscriber_starts_after_the_wait_and_says_so(
         ros_processes, ros_node, request):
     """Nobody subscribes: simulated time starts after AUTO_WAIT_TIMEOUT, with a warning

@@ -26,28 +26,19 @@ def verify(path) -> str:
     return text
 
 
-STALLED = 'setpoints of the stream reached the simulator after their due time'
-"""What ``rotrod demo`` says when the machine held its setpoint stream up (the simulator
-counts the setpoints that arrived after their due time)."""
-
-
 @pytest.fixture(scope='module')
 def demo(tmp_path_factory):
     """``rotrod demo``: (its recording, the completed process).
 
-    Run once more if the demo says the machine held its stream up for longer than
-    setpoint_delay (then the hub did not follow Eq. 26 there, and the comparison with
-    the offline run is the machine's, not the simulator's): a shared CI machine
-    sometimes stops processes for a second.
+    Eq. 26 goes to the simulator as one trajectory, executed on the simulator's clock:
+    the machine's hiccups delay the nodes, not the profile's timing on the rod (a
+    stream was re-gridded on its arrivals: on CI the hub once followed it 0.14 s after
+    its first motion).
     """
-    for attempt in (1, 2):
-        out = tmp_path_factory.mktemp('demo') / 'rotrod.rrd'
-        run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)],
-                             capture_output=True, text=True, timeout=300)
-        assert run.returncode == 0, run.stdout + run.stderr
-        if STALLED not in run.stdout:
-            break
-        print(f'demo run {attempt}: the stream was held up\n{run.stdout}')
+    out = tmp_path_factory.mktemp('demo') / 'rotrod.rrd'
+    run = subprocess.run([*executable('rotrod'), 'demo', '-o', str(out)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
     return out, run
 
 
@@ -90,12 +81,12 @@ def test_the_main_job_end_to_end(demo):
     w_mid = profile.omega(middle[spin_up])
     model = np.column_stack(((w0 - w_mid) / (2 * np.pi), (w0 + w_mid) / (2 * np.pi)))
     given = np.isfinite(fe[spin_up])
-    # NaN where a window is not stationary: the spin-up's own whirls are ~0.1 um, and
-    # small corrections of the streamed w (delivery hiccups) start new ones
-    # (how many depends on the stream's hiccups: the fraction is printed)
+    # NaN where a window is not stationary: the spin-up's own whirls are ~0.1 um (a
+    # streamed w's small corrections, at delivery hiccups, started new ones: then 30 %
+    # of the windows were given; the trajectory's w has none: 100 % here)
     print(f"estimates given in {given.mean():.0%} of the spin-up windows")
     assert given.mean() >= 0.2, given.mean()
-    # Such a correction inside a window is not in the estimator's model of steady
+    # A correction inside a window is not in the estimator's model of steady
     # whirls: its split-window check and its misfit rule for a pair drop the whirls it
     # moves (a window was once published 2.9 % off, before them; test_whirl.py keeps
     # 37 such windows)
@@ -108,6 +99,14 @@ def test_the_main_job_end_to_end(demo):
                                      recording.PROFILE_TIMELINE)
     origin = float(np.median(t - tp))
     assert abs(origin - shift) <= 0.02 + 1e-9, (origin, shift)
+    # the tip IMU beside it: its gyroscope's z is the hub's w turned by the rod's small
+    # tilt (cos a cos b w, a, b < 0.02 rad at 3 mm: 2e-4 of w) plus the tilt's own rates
+    ti, gyro = recording.read_series(out, recording.IMU_ANGULAR_VELOCITY)
+    assert gyro.shape[1] == 3 and len(ti) >= 0.9 * len(t)
+    w_at = dict(zip(np.round(t, 6), w))
+    paired = [(w_at[k], g) for k, g in zip(np.round(ti, 6), gyro[:, 2]) if k in w_at]
+    assert len(paired) >= 0.9 * len(ti)
+    assert max(abs(g - wk) for wk, g in paired) <= 1e-3
 
 
 def share(pixels, condition) -> float:

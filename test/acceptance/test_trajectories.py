@@ -184,6 +184,8 @@ def test_bad_goals_get_the_standard_code_and_a_sentence_and_the_hub_keeps_its_mo
     # a slow ramp to 0.5 rad/s first: the bad goals come while the hub turns
     _, _, moving = send(ros_node, client, goal([(2.0, [], [0.5], [0.0])]))
     assert result_of(ros_node, moving)[0] == GoalStatus.STATUS_SUCCEEDED
+    ros_node.spin_until(lambda: any(m.velocity[0] == 0.5 for m in joint), 5, 'w = 0.5 rad/s')
+    held = next(i for i, m in enumerate(joint) if m.velocity[0] == 0.5)  # the ramp's end
     for g, code, sentence in BAD:
         _, _, future = send(ros_node, client, g)
         status, result = result_of(ros_node, future)
@@ -191,7 +193,8 @@ def test_bad_goals_get_the_standard_code_and_a_sentence_and_the_hub_keeps_its_mo
         assert result.error_code == code and sentence in result.error_string, result
     n = len(joint)
     ros_node.spin_until(lambda: len(joint) > n + 50, 10, 'joint_states after the refusals')
-    assert all(m.velocity[0] == 0.5 for m in joint[n - 5:])          # nothing changed
+    # nothing changed: from the ramp's end, through the refusals and 50 samples after
+    assert all(m.velocity[0] == 0.5 for m in joint[held:])
     assert sim.running
     # torque drive: a goal is refused with the reason
     set_parameters(ros_node, ns, param('drive', 'torque'))

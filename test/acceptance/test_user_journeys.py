@@ -164,6 +164,8 @@ def check_settled_at_2_rad_s(sim, obs, t_reached):
     assert 'halted' not in sim.output and sim.running
 
 
+@pytest.mark.long   # 20 s of real time: in CI's long run (to keep the default run under 15
+# minutes); the default run checks the same hold after a single setpoint, just below
 def test_a_2_rad_s_setpoint_at_10_hz_runs_on_past_the_3_mm_criterion(
         ros_processes, ros_node, request):
     ns = namespace(request)

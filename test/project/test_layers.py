@@ -2,8 +2,8 @@
 
 Ranks, lowest first; a module may import its own subpackage and lower ranks only::
 
-    numerics < model < command < offline < analysis < live < estimation   (the physics)
-             < reporting < cli, the package's __init__                  (above it)
+    numerics < model < command < offline < analysis < sensors < live < estimation
+             < reporting < cli, the package's __init__      (the physics, then above it)
 
 ``rotrod_ros`` (the nodes) sits above all of ``rotrod_core``, and nothing in
 ``rotrod_core`` imports it. The physics imports no ROS, matplotlib or rerun.
@@ -14,9 +14,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 RANKS = {name: rank for rank, name in enumerate(
-    ['numerics', 'model', 'command', 'offline', 'analysis', 'live', 'estimation',
+    ['numerics', 'model', 'command', 'offline', 'analysis', 'sensors', 'live', 'estimation',
      'reporting', 'cli', '__init__'])}
-PHYSICS = ('numerics', 'model', 'command', 'offline', 'analysis', 'live', 'estimation')
+PHYSICS = ('numerics', 'model', 'command', 'offline', 'analysis', 'sensors', 'live',
+           'estimation')
 NOT_IN_PHYSICS = ('rotrod_ros', 'rclpy', 'matplotlib', 'rerun')
 
 

@@ -237,6 +237,8 @@ def test_passes(ros_processes):
 '''
 
 
+@pytest.mark.long   # 12 s, a pytest session of its own: in CI's long run (the default run
+# was at 14:30-15:14 of its 15 minutes); the harness's other tests stay in the default run
 def test_failure_report_shows_output_and_cleans_up(tmp_path):
     """Run a small pytest session with the harness; check reports and cleanup."""
     (tmp_path / 'pytest.ini').write_text('[pytest]\n')

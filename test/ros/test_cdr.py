@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.serialization import deserialize_message, serialize_message
 from rotrod_interfaces.msg import DynamicFrequencies
@@ -94,5 +95,35 @@ def test_a_joint_state_of_no_joints_reads_back():
 
 def test_joint_states_of_the_wrong_length_are_refused():
     encoder = cdr.JointStates(JOINT_NAMES)
-    with pytest.raises(ValueError, match='3 joints: got 2 positions'):
-        encoder.pack(0, 0, [0.0, 1.0], [0.0] * 3, [0.0] * 3)
+    n = len(JOINT_NAMES)
+    with pytest.raises(ValueError, match=f'{n} joints: got 2 positions'):
+        encoder.pack(0, 0, [0.0, 1.0], [0.0] * n, [0.0] * n)
+
+
+STATUS_TEXTS = ['', 'a', 'ab', 'abc', 'abcd', 'rotrod_simulator: rod3', 'ré', 'deflection 2.98 mm']
+
+
+@pytest.mark.parametrize('frame', ['', 'a', 'ab', 'abc'])
+def test_a_diagnostic_array_is_the_serialised_message(frame):
+    """Every padding of each string, several statuses, none, and values of each length."""
+    rng = np.random.default_rng(len(frame))
+    for n_statuses in (0, 1, 3):
+        statuses = []
+        for _ in range(n_statuses):
+            texts = [STATUS_TEXTS[i] for i in rng.integers(len(STATUS_TEXTS), size=3)]
+            values = [(STATUS_TEXTS[i], messages.value_text(float(x)))
+                      for i, x in zip(rng.integers(len(STATUS_TEXTS), size=int(rng.integers(5))),
+                                      rng.normal(size=5))]
+            statuses.append((int(rng.integers(4)), *texts, values))
+        sec, nanosec = int(rng.integers(2**31)), int(rng.integers(10**9))
+        padding: list = []
+        raw = cdr.diagnostic_array(sec, nanosec, statuses, frame, padding)
+        msg = DiagnosticArray()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        msg.header.frame_id = frame
+        msg.status = [DiagnosticStatus(level=bytes([level]), name=name, message=message,
+                                       hardware_id=hardware_id,
+                                       values=[KeyValue(key=k, value=v) for k, v in values])
+                      for level, name, message, hardware_id, values in statuses]
+        assert same_bytes(raw, serialize_message(msg), padding)
+        assert deserialize_message(raw, DiagnosticArray) == msg

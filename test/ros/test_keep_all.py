@@ -76,3 +76,38 @@ def test_an_error_while_the_context_shuts_down_is_raised():
     sent = publishing(HeldUpPublisher(1), ok=lambda: False)
     with pytest.raises(RCLError):
         sent.send('joint_states', 'z', wait=True)
+
+
+class CountedPublisher:
+    """Counts the looks at its subscribers."""
+
+    def __init__(self) -> None:
+        self.looks = 0
+
+    def get_subscription_count(self) -> int:
+        self.looks += 1
+        return 1
+
+
+def test_publishers_made_together_look_for_subscribers_at_their_own_phase(monkeypatch):
+    """Two rods' looks every 0.1 s: both at once at first, then the one of phase 0.5
+    half a period after the one of phase 0; each once a period from then on."""
+    now = [100.0]
+    monkeypatch.setattr(time, 'monotonic', lambda: now[0])
+    counted = {phase: CountedPublisher() for phase in (0.0, 0.5)}
+    rods = {phase: KeepAllPublishing({'joint_states': p}, Logger(), lambda: True,
+                                     lambda: True, phase=phase)
+            for phase, p in counted.items()}
+    looked = []
+    for k in range(40):                        # 10 ms apart: 0.4 s
+        now[0] = 100.0 + 0.01 * k + 1e-6
+        for phase, rod in rods.items():
+            before = counted[phase].looks
+            rod.look(['joint_states'], 0.1)
+            if counted[phase].looks > before:
+                looked.append((k, phase))
+    assert looked[:2] == [(0, 0.0), (0, 0.5)]
+    assert [k for k, phase in looked if phase == 0.0] == [0, 10, 20, 30]
+    assert [k for k, phase in looked if phase == 0.5] == [0, 15, 25, 35]
+    with pytest.raises(ValueError, match='phase'):
+        KeepAllPublishing({}, Logger(), lambda: True, lambda: True, phase=1.0)

@@ -37,6 +37,7 @@ def run_controller(ros_processes, out, stepping: str, name: str) -> None:
     assert proc.wait(timeout=300) == 0, proc.output
 
 
+@pytest.mark.long      # 10 s, twice and under load: CI's long run (the default run's budget)
 def test_the_lockstep_controller_gives_the_same_file_twice_once_under_load(ros_processes,
                                                                           tmp_path):
     sim = ros_processes.start_console_script(

@@ -24,11 +24,16 @@ def test_stamp_round_trip(t):
 
 def test_messages_carry_units_frames_and_labels():
     t = messages.stamp(1.25)
-    js = messages.joint_state(t, State(1e-3, -2e-4, 0.01, -0.02, 0.5, 2.0), -0.01)
-    assert list(js.name) == ['hub', 'tip_radial', 'tip_tangential']
-    assert list(js.position) == [0.5, 1e-3, -2e-4]
-    assert list(js.velocity) == [2.0, 0.01, -0.02]
-    assert list(js.effort) == [-0.01, 0.0, 0.0]             # the tip joints are passive
+    js = messages.joint_state(t, State(1e-3, -2e-4, 0.01, -0.02, 0.5, 2.0), -0.01, 0.3)
+    assert list(js.name) == ['hub', 'tip_radial', 'tip_tangential', 'tip_pitch', 'tip_roll']
+    assert list(js.position)[:3] == [0.5, 1e-3, -2e-4]
+    assert list(js.velocity)[:3] == [2.0, 0.01, -0.02]
+    # the tilt: the cantilever's slope 3/2 (u, v) / l, as angles about y, then -x
+    su, sv = 1.5 * 1e-3 / 0.3, 1.5 * -2e-4 / 0.3
+    assert js.position[3] == pytest.approx(math.atan(su), rel=1e-12)
+    assert js.position[4] == pytest.approx(-math.atan2(sv, math.hypot(1, su)), rel=1e-12)
+    assert js.velocity[3] == pytest.approx(1.5 * 0.01 / 0.3 / (1 + su * su), rel=1e-12)
+    assert list(js.effort) == [-0.01, 0.0, 0.0, 0.0, 0.0]   # the tip joints are passive
     d = messages.deflection(t, 1e-3, -2e-4, 'rotor')
     assert d.header.frame_id == 'rotor' and (d.vector.x, d.vector.y, d.vector.z) == (
         1e-3, -2e-4, 0.0)
@@ -83,8 +88,8 @@ def test_sample_messages_written_anew_equal_fresh_messages():
         t = messages.stamp(0.01 * k)
         sec, nanosec = t.sec, t.nanosec
         state = State(1e-3 * k, -2e-4, 0.01, -0.02 * k, 0.5 * k, 2.0 + k)
-        assert deserialize_message(m.joint_state(sec, nanosec, state, 0.1 * k),
-                                   JointState) == messages.joint_state(t, state, 0.1 * k)
+        assert deserialize_message(m.joint_state(sec, nanosec, state, 0.1 * k, 0.3),
+                                   JointState) == messages.joint_state(t, state, 0.1 * k, 0.3)
         assert deserialize_message(m.deflection(sec, nanosec, 1e-3 * k, 2e-4),
                                    Vector3Stamped) == \
             messages.deflection(t, 1e-3 * k, 2e-4, 'rod1/rotor')

@@ -106,6 +106,9 @@ def test_each_node_declares_its_specs_and_creates_its_interfaces(executable, con
         # topics by their resolved name, services (rclpy keeps it) by the one given
         want = {i.name if i.kind == 'srv' or i.name.startswith('/') else f'{ns}/{i.name}'
                 for i in module.INTERFACES if i.kind not in ('action', 'action client')}
+        for name, choices in getattr(module, 'TOPIC_CHOICES', {}).items():  # one of each
+            chosen = node.get_parameter(name).value
+            want -= {f'{ns}/{topic}' for choice, topic in choices.items() if choice != chosen}
         made = {x.topic_name for x in (*node.publishers, *node.subscriptions)} | {
             x.srv_name for x in node.services}
         assert {m for m in made if not builtin(m)} == want

@@ -187,6 +187,7 @@ def check_world(world: dict) -> None:
     assert world['left'] == ['hub', 'tip']
 
 
+@pytest.mark.long      # 32 s: CI's long run, to keep the default run under 15 min
 def test_a_standard_client_steps_resets_replays_plays_and_spawns_rods(ros_processes,
                                                                        tmp_path):
     report = run_client(ros_processes, tmp_path)

@@ -324,6 +324,7 @@ CPU_AT_DEFAULTS = 0.5
 (bench_realtime measures ~0.2; a busy-waiting thread took it to ~1.1)."""
 
 
+@pytest.mark.long      # a 13 s CPU measurement: CI's long run (the default run's budget)
 def test_at_its_defaults_with_every_sample_topic_subscribed_the_simulator_takes_under_half_a_core(
         ros_processes, ros_node, request):
     """The simulator at 2 rad/s, its defaults (1 kHz physics, 100 Hz samples, the whirl

@@ -179,6 +179,29 @@ def test_a_stall_among_a_streams_first_samples_moves_only_its_first_nano_rad_s(f
     assert sh.late_setpoints == 0
 
 
+@pytest.mark.parametrize('held', [0.02, 0.05, 0.15, 0.18])
+@pytest.mark.parametrize('profile', ['eq26', 'sine'])
+def test_a_start_burst_shorter_than_the_delay_does_not_reach_w(held, profile):
+    """The first samples of a stream held up for ``held`` s (< the delay less an
+    interval) and delivered together, as DDS does when the subscriber matches the sender
+    after it has started: once the punctual samples show the grid, the burst's
+    setpoints are due on it, so w is the stream's linear interpolation delayed by the
+    delay from the start, as if every sample had come on time (before, w left its rest
+    value at the burst's arrival, up to the delay early)."""
+    D, n = 0.2, 800
+    omega = (Eq26Profile(period=15.0, omega_target=2.0).omega if profile == 'eq26'
+             else (lambda t: 0.5 * (1.0 - np.cos(2.0 * t))))           # |w'| <= 1 rad/s^2
+    sh = OmegaSetpointShaper(10.0, delay=D)
+    grid = np.arange(n) * T
+    values = np.array([float(omega(x)) for x in grid])
+    for k in range(n):
+        sh.command(values[k], max(grid[k], held))
+    t = np.arange(0.0, (n - 1) * T + D, T / 4)
+    w, _ = sample(sh, t)
+    assert np.max(np.abs(w - np.interp(t - D, grid, values, left=0.0))) < 1e-12
+    assert sh.late_setpoints == 0
+
+
 def brute_force_lower_hull(t):
     """Indices i such that (i, t_i) is a vertex of the lower convex hull (O(n^3))."""
     n = len(t)

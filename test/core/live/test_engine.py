@@ -158,13 +158,15 @@ def test_the_critical_deflection_is_an_alarm_and_the_simulation_goes_on():
     eng = SimulationEngine()
     eng.command_omega(3.0)            # static deflection 6.5 mm, beyond the 3 mm criterion
     crossed = None
-    for _ in range(30000):
+    for k in range(30000):
         assert eng.step()
         if crossed is None and eng.deflection > 3e-3:
             crossed = eng.time
             h = eng.health()
             assert h.level == ERROR and 'beyond the critical deflection 3 mm' in h.message
-            assert 'still running' in h.message
+            assert 'still running' in h.message and eng.level() == ERROR
+        if k % 250 == 0:                # through every level: the level alone is the same
+            assert eng.level() == eng.condition()[0]
     assert eng.halted is None and eng.state.omega == 3.0
     us = M * 9.0 * R0 / (K - M * 9.0)            # docs/model.md, u_s at 3 rad/s
     assert us == pytest.approx(6.506e-3, rel=1e-3)
@@ -516,6 +518,7 @@ def test_engine_configs_are_refused_with_a_reason_or_work(kwargs):
     assert finite(engine.state) and finite(engine.energy()) and finite(engine.frequencies())
     assert all(finite(v) for v in engine.critical_speeds.values())
     health = engine.health()
+    assert engine.level() == health.level               # the level alone, as a world looks
     if engine.deflection > config.deflection_limit:   # an alarm, not a refusal
         assert health.level == 2 and 'beyond the critical deflection' in health.message
     else:

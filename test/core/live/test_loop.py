@@ -15,6 +15,7 @@ import sys
 import threading
 import time
 
+import numpy as np
 import pytest
 
 import rotrod_core.live.scheduling as scheduling
@@ -266,6 +267,28 @@ def test_faster_than_real_time_markers_at_most_twice_marker_rate_per_wall_second
     assert min(b - a for a, b in zip(marked, marked[1:])) >= 0.025 - 1e-9
 
 
+def test_in_a_world_each_rods_markers_come_at_marker_rate_on_its_own_sample():
+    """Ten rods, markers every fifth sample: each rod's every fifth sample, two rods'
+    per sample, not all ten on one."""
+    world = World(1000.0)
+    for k in range(10):
+        SimulationEngine(EngineConfig(), world=world, name=f'rod{k}')
+    marked: dict = {}
+    clock = FakeClock()
+    loop = RealTimeLoop(world, LoopSettings(realtime_priority=0, cpu_dma_latency=-1,
+                                            marker_rate=20.0),
+                        lambda s, *context: marked.setdefault(s.time, []).append(
+                            (s.rod, s.markers)), clock=clock, logger=Logger())
+    while clock.now < START + 1.0:
+        assert loop.cycle()
+    assert len(marked) >= 100
+    for rods in marked.values():
+        assert sum(m for _, m in rods) == 2
+    for k in range(10):
+        times = [t for t, rods in marked.items() if (f'rod{k}', True) in rods]
+        assert np.diff(times) == pytest.approx(0.05, abs=1e-12)
+
+
 def test_markers_off_means_none():
     run = Run(markers=False)
     run.until_wall(0.5)
@@ -439,6 +462,27 @@ def test_status_at_diagnostics_rate_with_the_loops_counters():
     values = dict(run.statuses[-1].values)
     assert values['paused'] is False and values['real_time_factor'] == 1.0
     assert values['overruns'] == 0 and values['dropped_commands'] == 0
+
+
+def test_in_a_world_each_rods_periodic_status_comes_at_the_rate_spread_over_the_period():
+    """Ten rods at 1 Hz: each rod's status once a second, at most two rods' in one
+    publication after the first (all, their levels new), not all ten together."""
+    world = World(1000.0)
+    names = [f'rod{k}' for k in range(10)]
+    for name in names:
+        SimulationEngine(EngineConfig(), world=world, name=name)
+    batches: list = []
+    clock = FakeClock()
+    loop = RealTimeLoop(world, LoopSettings(realtime_priority=0, cpu_dma_latency=-1),
+                        lambda s, *context: None, clock=clock, logger=Logger(),
+                        publish_status=batches.append)
+    while clock.now < START + 3.0:
+        assert loop.cycle()
+    assert sorted(st.rod for st in batches[0]) == names and len(batches) > 20
+    assert max(len(batch) for batch in batches[1:]) <= 2
+    for name in names:
+        count = sum(st.rod == name for batch in batches for st in batch)
+        assert count in (3, 4)      # at 0, then once a second on the rod's phase
 
 
 def test_a_failing_publication_is_reported_and_ends_the_loop():

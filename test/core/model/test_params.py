@@ -168,3 +168,13 @@ def test_a_batch_with_one_unusable_system_is_refused(masses, diameter):
     diameters[-1] = diameter
     with pytest.raises(ValueError, match='RodParams'):
         RodParams(mass=np.array(masses), rod_diameter=diameters)
+
+
+def test_the_load_radius_is_r0_without_a_rod_and_r0_me_over_m_with_one():
+    """re = (Me / M) r0: the shape integrals' 3/8 and 33/140 of the rod's mass."""
+    assert RodParams().load_radius == RodParams().eccentricity
+    heavy = RodParams(rod_density=7850.0)
+    rod = 7850.0 * heavy.section_area * heavy.rod_length
+    m = heavy.mass
+    assert heavy.load_radius == pytest.approx(
+        heavy.eccentricity * (m + 3 / 8 * rod) / (m + 33 / 140 * rod), rel=1e-15)

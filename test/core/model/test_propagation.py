@@ -277,7 +277,7 @@ def test_identification_runs_the_same_kernel(name):
     co = Coefficients.from_params(p)
     zeros = np.zeros_like(run.t)
     rec = identify._record(run.t, zeros, zeros, profile.omega(run.t), profile.omega_dot(run.t))
-    Y = identify._chain(identify._step_matrices(rec, float(co.w1sq), float(co.g1)))
-    z = Y[:, 0, :] @ np.array([0.0, 0.0, float(co.load_radius)])
+    basis, _, _ = identify._Problem(rec)._outputs(float(co.w1sq), float(co.g1))
+    z = basis @ np.array([0.0, 0.0, float(co.load_radius)])
     assert np.max(np.abs(z - (run.u + 1j * run.v))) <= 1e-12
     assert np.max(np.abs(z)) > 1e-4

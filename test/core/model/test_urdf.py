@@ -51,6 +51,38 @@ def tip_by_fk(tm, theta, u, v, frame='world'):
     return tm.get_transform('tip', frame)[:3, 3]
 
 
+def test_the_urdfs_tip_frame_is_the_imus_tilted_frame():
+    """With the joints joint_states publishes (the tilt joints from the state), the
+    URDF's ``tip`` frame (pytransform3d's forward kinematics) is the IMU's frame
+    (rotrod_core.sensors.imu, written apart): the same rotation, at the mass; and its z
+    axis is the rod's tangent at the tip, (3/2 u/l, 3/2 v/l, 1) normalised, turned by
+    theta."""
+    from scipy.spatial.transform import Rotation
+
+    from rotrod_core.model.equations import Coefficients, State
+    from rotrod_core.sensors.imu import imu_reading
+    params = RodParams()
+    co = Coefficients.from_params(params)
+    tm = transform_manager(urdf_text(params))
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        u, v = rng.uniform(-0.02, 0.02, 2)
+        theta = rng.uniform(-7, 7)
+        state = State(u, v, 0.1, -0.2, theta, 2.0)
+        positions, *_ = interface.joint_values(state, 0.0, L)
+        for name, q in zip(interface.JOINT_NAMES, positions):
+            tm.set_joint(name, q)
+        frame = tm.get_transform('tip', 'world')
+        imu = Rotation.from_quat(imu_reading(co, state, 0.0, L, 0.0).orientation).as_matrix()
+        assert np.allclose(frame[:3, :3], imu, rtol=0, atol=1e-12)
+        assert np.allclose(frame[:3, 3], tip_closed_form(R0, L, theta, u, v), atol=1e-12)
+        tangent = np.array([1.5 * u / L, 1.5 * v / L, 1.0])
+        c, s = math.cos(theta), math.sin(theta)
+        turned = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ (tangent /
+                                                                np.linalg.norm(tangent))
+        assert np.allclose(frame[:3, 2], turned, atol=1e-12)
+
+
 def tip_closed_form(r0, length, theta, u, v):
     """docs/model.md: the mass at (r0 + u) e1 + v e2 + l e3, e1 at angle theta."""
     return np.array([(r0 + u) * math.cos(theta) - v * math.sin(theta),
@@ -82,7 +114,8 @@ def test_frames_and_joints_form_the_documented_tree():
     root = ElementTree.fromstring(SHIPPED.read_text())
     links = {e.get('name') for e in root.iter('link')}
     assert links == {interface.WORLD_FRAME, interface.ROTOR_FRAME, interface.ROD_ROOT_FRAME,
-                     interface.TIP_RADIAL_FRAME, interface.TIP_FRAME}
+                     interface.TIP_RADIAL_FRAME, interface.TIP_TANGENTIAL_FRAME,
+                     interface.TIP_PITCH_FRAME, interface.TIP_FRAME}
     joints = {e.get('name'): (e.get('type'), e.find('parent').get('link'),
                               e.find('child').get('link'),
                               e.find('axis').get('xyz') if e.find('axis') is not None else None)
@@ -91,7 +124,9 @@ def test_frames_and_joints_form_the_documented_tree():
         'hub': ('continuous', 'world', 'rotor', '0 0 1'),
         'rod_mount': ('fixed', 'rotor', 'rod_root', None),
         'tip_radial': ('prismatic', 'rod_root', 'tip_radial_link', '1 0 0'),
-        'tip_tangential': ('prismatic', 'tip_radial_link', 'tip', '0 1 0'),
+        'tip_tangential': ('prismatic', 'tip_radial_link', 'tip_tangential_link', '0 1 0'),
+        'tip_pitch': ('revolute', 'tip_tangential_link', 'tip_pitch_link', '0 1 0'),
+        'tip_roll': ('revolute', 'tip_pitch_link', 'tip', '1 0 0'),
     }
     movable = [name for name, (kind, *_) in joints.items() if kind != 'fixed']
     assert tuple(movable) == interface.JOINT_NAMES
@@ -284,11 +319,11 @@ def test_the_urdfs_tip_is_tip_position_over_a_spin_up(ros_processes, ros_node, r
     errors, rotor_errors, thetas, us = [], [], [], []
     for msg, *_ in joints:
         assert list(msg.name) == list(interface.JOINT_NAMES)
-        assert list(msg.effort)[1:] == [0.0, 0.0]
+        assert list(msg.effort)[1:] == [0.0] * 4
         t = stamp(msg)
         if t not in by_stamp or t not in defl_by_stamp:    # subscribed at different times
             continue
-        theta, u, v = msg.position
+        theta, u, v = msg.position[:3]
         point = by_stamp[t]
         assert point.header.frame_id == interface.WORLD_FRAME
         fk = tip_by_fk(tm, theta, u, v)

@@ -97,14 +97,17 @@ def test_values_stamps_and_frames_are_the_runs(run, bag):
     assert [log for log, *_ in joints] == [round(x * 1e9) for x in t]
     stamps = np.array([seconds(m.header.stamp) for _, _, m, _ in joints])
     assert np.max(np.abs(stamps - t)) < 1e-9
-    assert all(list(m.name) == ['hub', 'tip_radial', 'tip_tangential'] for _, _, m, _ in joints)
+    assert all(list(m.name) == ['hub', 'tip_radial', 'tip_tangential', 'tip_pitch', 'tip_roll']
+               for _, _, m, _ in joints)
     assert all(m.header.frame_id == '' for _, _, m, _ in joints)
     pos = np.array([m.position for _, _, m, _ in joints])
     vel = np.array([m.velocity for _, _, m, _ in joints])
     eff = np.array([m.effort for _, _, m, _ in joints])
-    assert np.array_equal(pos, np.c_[run.theta[i], run.u[i], run.v[i]])
-    assert np.array_equal(vel, np.c_[run.omega[i], run.du[i], run.dv[i]])
-    assert np.array_equal(eff, np.c_[run.torque[i], np.zeros((len(i), 2))])
+    assert np.array_equal(pos[:, :3], np.c_[run.theta[i], run.u[i], run.v[i]])
+    assert np.array_equal(vel[:, :3], np.c_[run.omega[i], run.du[i], run.dv[i]])
+    assert np.array_equal(eff, np.c_[run.torque[i], np.zeros((len(i), 4))])
+    # the tip's tilt: the cantilever's slope 3/2 u / l about y (small: atan ~ itself)
+    assert np.allclose(pos[:, 3], np.arctan(1.5 * run.u[i] / L), rtol=1e-12, atol=0)
 
     defl = got['/tip/deflection']
     assert all(m.header.frame_id == 'rotor' for _, _, m, _ in defl)
@@ -192,7 +195,7 @@ def test_the_messages_are_the_live_nodes(run, bag):
                                           run.omega)))
     stamp = messages.stamp(run.t[k])
     expected = {
-        '/joint_states': (JointState, messages.joint_state(stamp, state, run.torque[k])),
+        '/joint_states': (JointState, messages.joint_state(stamp, state, run.torque[k], L)),
         '/tip/deflection': (Vector3Stamped, messages.deflection(stamp, state.u, state.v,
                                                                 'rotor')),
         '/tip/position': (PointStamped, messages.position(

@@ -43,3 +43,34 @@ def test_an_armed_writer_keeps_only_the_pretrigger_seconds_then_records_everythi
 def test_a_bad_pretrigger_is_refused(tmp_path, pretrigger):
     with pytest.raises(ValueError, match='pretrigger'):
         RecordingWriter(tmp_path / 'r.rrd', pretrigger=pretrigger)
+
+
+def test_the_imu_readings_are_written_as_two_series_of_three_in_their_own_panel(tmp_path):
+    path = tmp_path / 'r.rrd'
+    writer = RecordingWriter(path, imu=True)
+    t = np.round(np.arange(0.0, 1.0, 0.01), 10)
+    accel = np.column_stack([np.sin(t), np.cos(t), np.full_like(t, 9.81)])
+    gyro = np.column_stack([0.1 * t, -0.2 * t, 2.0 + t])
+    for k, tk in enumerate(t):
+        writer.add_state(tk, 0.0, 0.0)
+        writer.add_imu(tk, tuple(accel[k]), tuple(gyro[k]))
+    writer.close()
+    ta, a = recording.read_series(path, recording.IMU_ACCELERATION)
+    tg, g = recording.read_series(path, recording.IMU_ANGULAR_VELOCITY)
+    assert np.allclose(ta, t, atol=2e-9) and np.allclose(tg, t, atol=2e-9)
+    assert np.array_equal(a, accel) and np.array_equal(g, gyro)
+    assert 'timeseries/imu' in origins(recording.blueprint(imu=True))
+    assert 'timeseries/imu' not in origins(recording.blueprint())
+
+
+def origins(blueprint):
+    """The origins of a blueprint's views."""
+    import rerun.blueprint as rrb
+    found, todo = [], [blueprint.root_container]
+    while todo:
+        item = todo.pop()
+        if isinstance(item, (rrb.Horizontal, rrb.Vertical, rrb.Grid, rrb.Tabs)):
+            todo.extend(item.contents)
+        elif hasattr(item, 'origin'):
+            found.append(str(item.origin))
+    return found
