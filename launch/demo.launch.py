@@ -2,7 +2,7 @@
 
 Starts the same three nodes with the same parameter files as ``rotrod demo``
 (config/table1.yaml, then config/demo.yaml): the simulator faster than real time on
-/clock, the Rerun logger, and the profile publisher streaming Eq. 26. The logger
+/clock, the Rerun logger, and the profile publisher sending Eq. 26 as one trajectory. The logger
 writes rotrod.rrd in the working directory; stop with Ctrl-C after the publisher
 has finished (it exits at the end of the profile).
 

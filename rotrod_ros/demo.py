@@ -1,7 +1,8 @@
 """The main job: the paper's spin-up scenario through the three ROS nodes.
 
 Starts ``simulator`` (Table 1, faster than real time on /clock by default),
-``rerun_logger`` and ``profile_publisher`` (Eq. 26 for 40 s of simulated time) as
+``rerun_logger`` and ``profile_publisher`` (Eq. 26 for 40 s of simulated time, sent
+as one FollowJointTrajectory goal that the simulator executes on its clock) as
 separate processes with config/table1.yaml and config/demo.yaml, waits for the
 profile to end, stops the logger (which closes the recording) and the simulator,
 reads the recording back and prints, per stage, the extreme u and v beside the
@@ -45,7 +46,6 @@ from rotrod_core.reporting import recording
 from .child_process import ending_with_this_process
 from .install import executable, share_file
 from .parameters import defaults, rod_params
-from .simulator import stop_report
 
 EXECUTABLES = ('simulator', 'rerun_logger', 'profile_publisher')
 PARAM_FILES = ('config/table1.yaml', 'config/demo.yaml')
@@ -54,7 +54,7 @@ PLANNED_FILE = 'config/planned.yaml'
 """Added after PARAM_FILES for ``--profile planned``."""
 PROFILES = ('eq26', 'planned')
 HOLD = 5.0
-"""Simulated time streamed at the target speed after a planned spin-up, s."""
+"""Simulated time held at the target speed after a planned spin-up, s."""
 SETTLE = 0.5
 """Time after a plan's arrival before its whirl is measured, s (the stream's delay)."""
 
@@ -104,7 +104,7 @@ def node_commands(output: Path, speed: float | None, real_time: bool, profile: s
                   duration: float | None = None) -> dict[str, list[str]]:
     """The three commands (name -> argv), with their parameter files and overrides.
 
-    ``duration``: how long the profile publisher streams (s; default: the files').
+    ``duration``: where the profile publisher's trajectory ends (s; default: the files').
     """
     files = []
     for f in param_files(profile):
@@ -113,7 +113,7 @@ def node_commands(output: Path, speed: float | None, real_time: bool, profile: s
     if duration is not None:
         pub_over += ['-p', f'duration:={float(duration)!r}']
     if real_time:
-        sim_over = ['-p', 'real_time_factor:=1.0', '-p', 'setpoint_delay:=0.05']
+        sim_over = ['-p', 'real_time_factor:=1.0']
         pub_over += ['-p', 'use_sim_time:=false']
     elif speed is not None:
         sim_over = ['-p', f'real_time_factor:={float(speed)}']
@@ -238,13 +238,11 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
     finally:
         procs.stop_all()
     wall = time.monotonic() - t0
-    late = late_setpoints(procs.log('simulator'))
     if planned is not None:
         summary = summarize_planned(output, planned, planned_rod, t_run)
     else:
         summary = summarize(output, eq26, t_run)
     summary['wall_s'] = wall
-    summary['late_setpoints'] = late
     say(summary['table'])
     say(f'max |u - u_offline| = {summary["du"] * 1e3:.2e} mm '
         f'({summary["du_rel"]:.2%} of max u), max |v - v_offline| = {summary["dv"] * 1e3:.2e} '
@@ -253,21 +251,9 @@ def run(output: str | Path = 'out/rotrod.rrd', *, speed: float | None = None,
             if planned is None else
             f'the hub starts moving {summary["lead_s"] + planned.t_start:.3f} s into the '
             'recording'))
-    if late:
-        say(f'{late} setpoints of the stream reached the simulator after their due time: the '
-            'machine held the stream up for longer than setpoint_delay, and the hub did not '
-            'follow the profile there (the difference from the offline run is that, not '
-            'the simulator\'s accuracy); run again on a quieter machine, or slower '
-            '(--speed 1)')
     say(f'recording: {output} ({summary["samples"]} samples, {wall:.1f} s wall); open it '
         f'with: rerun {output}')
     return summary
-
-
-def late_setpoints(simulator_log: str) -> int | None:
-    """The simulator's count of late setpoints from its stop line (None: not found)."""
-    report = stop_report(simulator_log)
-    return None if report is None else report.late_setpoints
 
 
 def summarize(path: Path, profile: Eq26Profile, t_run: float) -> dict[str, Any]:
