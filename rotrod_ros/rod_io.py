@@ -291,10 +291,11 @@ class RodIO:
             rig.configure(settings.sensors)
         reading = self.observation.sensors.read(
             s.time, 1.0 / settings.publish_rate, self.engine.coefficients, config.params,
-            s.state, s.omega_dot, imu=subscribed('tip/imu'), strain=subscribed('rod/strain'))
+            s.state, s.omega_dot, imu=subscribed('tip/imu'), strain=subscribed('rod/strain'),
+            encoder=subscribed('hub/encoder'))
         if reading.imu is not None:
             send('tip/imu', rig.imu_message(sec, nanosec, reading.imu), wait)
-        if subscribed('hub/encoder'):
+        if reading.encoder is not None:
             send('hub/encoder', rig.encoder_message(sec, nanosec, reading.encoder), wait)
         if reading.wrench is not None:
             send('rod/strain', rig.strain_message(sec, nanosec, reading.wrench), wait)

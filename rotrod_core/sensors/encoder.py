@@ -50,18 +50,30 @@ class Encoder:
 
     def read(self, t: float, theta: float) -> EncoderReading:
         """The reading at time ``t`` (s, not before the previous one) and angle ``theta``."""
-        t = finite_number('t', t)
+        count = self.advance(t, theta)
+        t0, count0 = self._history[0]
+        t = self._history[-1][0]
+        speed = (count - count0) * self.quantum / (t - t0) if t > t0 else 0.0
+        return EncoderReading(count, count * self.quantum, speed)
+
+    def advance(self, t: float, theta: float) -> int:
+        """Count at time ``t`` (s) and angle ``theta`` (rad) without a reading: the counts.
+
+        What the encoder does at a sample nobody reads: its later speeds are the same
+        as if it had been read (a world's rods pay this at every sample).
+        """
+        if (type(t) is not float or type(theta) is not float
+                or not (math.isfinite(t) and math.isfinite(theta))):
+            t, theta = finite_number('t', t), finite_number('theta', theta)
         history = self._history
         if history and t < history[-1][0]:
             raise ValueError(f't must not go back: {t!r} after {history[-1][0]!r}')
-        count = self.count(theta)
+        count = math.floor(theta / self.quantum)
         history.append((t, count))
         # the reference: the newest reading at or before t - window (else the oldest)
         while len(history) > 1 and history[1][0] <= t - self.window:
             history.popleft()
-        t0, count0 = history[0]
-        speed = (count - count0) * self.quantum / (t - t0) if t > t0 else 0.0
-        return EncoderReading(count, count * self.quantum, speed)
+        return count
 
     @property
     def last_time(self) -> float | None:

@@ -73,7 +73,8 @@ class RigReading(NamedTuple):
     imu: ImuReading | None
     """None when it was not asked for, or the IMU does not read at this sample
     (``imu_rate``)."""
-    encoder: EncoderReading
+    encoder: EncoderReading | None
+    """None when it was not asked for."""
     wrench: RootWrench | None
     """None when it was not asked for."""
 
@@ -96,6 +97,9 @@ class RigSensors:
                         for axis in STRAIN_AXES]
         self._gains: tuple[RodParams, RootWrenchGains] | None = None
         self._imu_due: float | None = None      # simulated time of the IMU's next reading
+        self._quiet = all(p.off for p in (config.linear_acceleration, config.angular_velocity,
+                                          config.strain))
+        """No channel draws noise: a sample nobody reads only counts the encoder."""
 
     def reset(self, noise: bool = True) -> None:
         """Forget the encoder's counts (the hub may jump).
@@ -136,15 +140,23 @@ class RigSensors:
         return self._gains[1]
 
     def read(self, t: float, dt: float, co: Coefficients, params: RodParams, state: State,
-             omega_dot: float, *, imu: bool = True, strain: bool = True) -> RigReading:
+             omega_dot: float, *, imu: bool = True, strain: bool = True,
+             encoder: bool = True) -> RigReading:
         """The sensors' reading of the sample at simulated time ``t`` (s).
 
         ``dt``: s since the previous sample (the dynamic biases' step); ``co``,
         ``params``: the rod's; ``state``, ``omega_dot`` (rad/s^2): the sample's. Without
         ``imu`` (nobody reads it) the IMU's reading is None, without ``strain`` the
-        wrench, their channels drawing their noise all the same. The IMU reads (and
-        draws) only at its own instants (``imu_rate``).
+        wrench, their channels drawing their noise all the same; without ``encoder`` its
+        reading is None, the encoder counting all the same. The IMU reads (and draws)
+        only at its own instants (``imu_rate``).
         """
+        if not (imu or strain or encoder) and self._quiet:
+            # nobody reads and no channel draws: what is left is the IMU's schedule and
+            # the encoder's counts (a world's rods pay this at every sample)
+            self._imu_step(t, dt)
+            self._count(t, state)
+            return _UNREAD
         accel, gyro = self._imu
         imu_dt = self._imu_step(t, dt)
         reading: ImuReading | None = None
@@ -168,11 +180,25 @@ class RigSensors:
             if not self.config.strain.off:
                 for c in self._strain:
                     c.apply(0.0, dt)
+        if not encoder:
+            self._count(t, state)
+            return RigReading(reading, None, wrench)
+        self._rewind(t)
+        return RigReading(reading, self.encoder.read(t, float(state.theta)), wrench)
+
+    def _rewind(self, t: float) -> None:
+        """Time went back before ``t`` (s), a reset: the encoder counts anew."""
         last = self.encoder.last_time
         if last is not None and t < last:
-            self.encoder.reset()            # time went back (a reset): counting anew
-        encoder = self.encoder.read(t, float(state.theta))
-        return RigReading(reading, encoder, wrench)
+            self.encoder.reset()
+
+    def _count(self, t: float, state: State) -> None:
+        """The encoder counts the sample's angle; nobody reads it."""
+        self._rewind(t)
+        self.encoder.advance(t, float(state.theta))
+
+
+_UNREAD = RigReading(None, None, None)
 
 
 __all__ = ['AXES', 'RigReading', 'RigSensors', 'SensorConfig']

@@ -4,6 +4,7 @@ the encoder across a reset of time."""
 import math
 
 import numpy as np
+import pytest
 
 from rotrod_core.model.equations import Coefficients, State
 from rotrod_core.model.params import RodParams
@@ -36,15 +37,32 @@ def test_without_noise_the_sensors_read_the_true_imu_wrench_and_counts():
         assert reading.encoder.counts == math.floor(state.theta / (2 * math.pi / 360))
 
 
-def readings(sensors, want, n=30):
+def readings(sensors, want, n=30, encoder=lambda k: True):
     params = RodParams()
     co = Coefficients.from_params(params)
     out = []
     for k in range(n):
         r = sensors.read(0.01 * k, 0.01, co, params, sample(k), 0.0, imu=want(k),
-                         strain=want(k))
+                         strain=want(k), encoder=encoder(k))
         out.append(r)
     return out
+
+
+@pytest.mark.parametrize('config', [SensorConfig(encoder_window=0.05), NOISY],
+                         ids=['noise off', 'noisy'])
+def test_the_encoder_counts_at_samples_nobody_reads(config):
+    """Read at every third sample only (nothing else read either), the encoder gives
+    there the readings of one read at every sample: its speed over the window counts
+    the samples between (noise off, nobody reads: the cheap path a world's rods take)."""
+    every = readings(RigSensors(config, 3, 'rod1'), lambda k: True)
+    some = readings(RigSensors(config, 3, 'rod1'), lambda k: k % 3 == 0,
+                    encoder=lambda k: k % 3 == 0)
+    for k in range(30):
+        if k % 3:
+            assert some[k] == (None, None, None)
+        else:
+            assert some[k] == every[k]
+    assert len({r.encoder.speed for r in every}) > 3        # the speeds change
 
 
 def test_the_noise_does_not_depend_on_who_reads_the_imu():
