@@ -189,20 +189,27 @@ def test_a_rod_that_is_not_table1_is_planned_from_the_simulators_description(
     assert wrong_peak > peak
 
 
-@pytest.mark.parametrize('params, reason', [
+CANNOT_PLAN = [
     ({'robust': 1.0}, 'robust must be < 1'),
     ({'residual': 0.0}, 'residual must be > 0'),
     ({'deflection_limit': 0.002}, 'static deflection at omega_target = 2 rad/s'),
     ({'omega_target': 13.0, 'deflection_limit': 1.0}, 'lowest natural frequency'),
-])
+]
+"""Requests the planner cannot meet, each with what the publisher must say."""
+
+
 def test_the_publisher_says_why_it_cannot_plan_and_exits_non_zero(
-        ros_processes, ros_node, request, params, reason):
+        ros_processes, ros_node, request):
+    """Each of CANNOT_PLAN's publishers (started together, one simulator) exits 1,
+    saying it cannot plan and why."""
     ns = namespace(request)
     start_simulator(ros_processes, ns, 'table1.yaml', markers=False)
-    ros_args = ros_arguments(namespace=ns, params={'profile': 'planned', **params})
-    proc = ros_processes.start_console_script('profile_publisher', *ros_args)
-    assert proc.wait(timeout=60) == 1
-    assert 'cannot plan' in proc.output and reason in proc.output
+    started = [(reason, ros_processes.start_console_script('profile_publisher', *ros_arguments(
+        namespace=ns, params={'profile': 'planned', **params})))
+        for params, reason in CANNOT_PLAN]
+    for reason, proc in started:
+        assert proc.wait(timeout=60) == 1, (reason, proc.output)
+        assert 'cannot plan' in proc.output and reason in proc.output, (reason, proc.output)
 
 
 def test_a_bad_rod_parameter_is_refused_at_start(ros_processes):

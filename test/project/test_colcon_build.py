@@ -32,6 +32,7 @@ import subprocess
 import sys
 import time
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from importlib import metadata
 from pathlib import Path
 
@@ -256,26 +257,36 @@ def test_console_scripts_installed_and_run(colcon_install):
     assert sorted(p.name for p in lib_dir.iterdir()) == sorted(declared)
 
     env, cwd = colcon_install['env'], colcon_install['cwd']
-    for name, target in sorted(declared.items()):
+
+    def run(argv: list[str]) -> tuple[subprocess.CompletedProcess, float]:
+        t0 = time.monotonic()
+        proc = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True,
+                              timeout=120, check=False)
+        return proc, time.monotonic() - t0
+
+    scripts = {}
+    for name in sorted(declared):
         exe = lib_dir / name
         assert exe.is_file() and os.access(exe, os.X_OK), f'{exe} is not executable'
         shebang = exe.read_text().splitlines()[0]
         assert shebang.startswith('#!'), f'{exe}: no shebang'
-        interpreter = shebang[2:].strip().split()[0]
-
-        t0 = time.monotonic()
-        proc = subprocess.run([str(exe), '--help'], cwd=cwd, env=env, capture_output=True,
-                              text=True, timeout=120, check=False)
-        seconds = time.monotonic() - t0
+        scripts[name] = (exe, shebang[2:].strip().split()[0])
+    # each script's --help, and a probe of what the same script imports with the same
+    # interpreter and environment: all together (each starts Python and its imports)
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        helps = {name: pool.submit(run, [str(exe), '--help'])
+                 for name, (exe, _) in scripts.items()}
+        probes = {name: pool.submit(run, [interpreter, '-c', RUN_SCRIPT, str(exe)])
+                  for name, (exe, interpreter) in scripts.items()}
+    for name, target in sorted(declared.items()):
+        exe = scripts[name][0]
+        proc, seconds = helps[name].result()
         assert proc.returncode == 0, (
             f'{name} --help failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}')
         assert proc.stdout.strip(), f'{name} --help printed nothing'
-        print(f'  {name} = {target}: {exe} --help ok ({seconds:.2f} s): '
-              f'{proc.stdout.strip().splitlines()[0]}')
-
-        # Same script, same interpreter and environment: which modules did it import?
-        proc = subprocess.run([interpreter, '-c', RUN_SCRIPT, str(exe)], cwd=cwd, env=env,
-                              capture_output=True, text=True, timeout=120, check=False)
+        print(f'  {name} = {target}: {exe} --help ok ({seconds:.2f} s, run with the '
+              f'others): {proc.stdout.strip().splitlines()[0]}')
+        proc, _ = probes[name].result()
         lines = [ln for ln in proc.stderr.splitlines() if ln.startswith('@@PROBE@@')]
         assert lines, f'{name}: probe failed:\n{proc.stderr}'
         probe = json.loads(lines[-1][len('@@PROBE@@'):])

@@ -59,8 +59,9 @@ def test_the_floor_publishes_the_simulators_sample_topics_every_10_ms(
 
 
 def test_the_floor_refuses_a_rate_that_is_not_a_positive_number(ros_processes):
-    for rate in ('0', '-100', 'nan', 'inf'):
-        proc = ros_processes.start([sys.executable, str(FLOOR), '--rate', rate],
-                                   name=f'floor_{rate}')
+    started = [(rate, ros_processes.start([sys.executable, str(FLOOR), '--rate', rate],
+                                          name=f'floor_{rate}'))
+               for rate in ('0', '-100', 'nan', 'inf')]         # together: each imports rclpy
+    for rate, proc in started:
         assert proc.wait(timeout=30) == 2, rate
         assert '--rate must be a positive number' in proc.output, proc.output

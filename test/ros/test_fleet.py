@@ -104,12 +104,14 @@ def test_bad_fleet_sizes_are_refused_with_the_reason():
     with pytest.raises(SystemExit) as exc:
         fleet.main(['--rods', '0'])
     assert exc.value.code == 2
-    out = subprocess.run([*console_script('rotrod'), 'fleet', '--rods', '0'],
-                         capture_output=True, text=True, timeout=60)
-    assert out.returncode == 2 and 'rods must be an integer 1..100, got 0' in out.stderr
-    out = subprocess.run([*console_script('rotrod'), 'fleet', '--help'],
-                         capture_output=True, text=True, timeout=60)
-    assert out.returncode == 0 and '--rods' in out.stdout and '--profile' in out.stdout
+    # the two commands together (each starts Python and its imports)
+    bad, help_ = (subprocess.Popen([*console_script('rotrod'), 'fleet', *args], text=True,
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                  for args in (['--rods', '0'], ['--help']))
+    out, err = bad.communicate(timeout=60)
+    assert bad.returncode == 2 and 'rods must be an integer 1..100, got 0' in err
+    out, err = help_.communicate(timeout=60)
+    assert help_.returncode == 0 and '--rods' in out and '--profile' in out
 
 
 def test_fleet_commands_name_every_rod_its_namespace_files_and_frames():

@@ -274,16 +274,19 @@ def test_table1_params_file_loads_and_bad_files_are_refused(ros_processes, tmp_p
     proc = ros_processes.start_console_script(
         'simulator', '--ros-args', '-r', f'__ns:={ns}', '--params-file', str(table1))
     proc.wait_for_output('ready: drive=velocity, coupling=exact, physics 1000 Hz', timeout=30)
-    for text, reason in [('mass: -0.3', 'mass'), ('physics_rate: 10.0', 'too low'),
-                         ("mass: 'heavy'", 'mass'), ('section: hexagonal', 'section'),
-                         ('cpu_dma_latency: -2', 'cpu_dma_latency'),
-                         ('cpu_dma_latency: 0.5', 'cpu_dma_latency')]:
-        bad = tmp_path / 'bad.yaml'
+    started = []                  # the bad files' simulators together (each imports rclpy)
+    for k, (text, reason) in enumerate([
+            ('mass: -0.3', 'mass'), ('physics_rate: 10.0', 'too low'),
+            ("mass: 'heavy'", 'mass'), ('section: hexagonal', 'section'),
+            ('cpu_dma_latency: -2', 'cpu_dma_latency'),
+            ('cpu_dma_latency: 0.5', 'cpu_dma_latency')]):
+        bad = tmp_path / f'bad{k}.yaml'
         bad.write_text(f'/**:\n  ros__parameters:\n    {text}\n')
-        proc = ros_processes.start_console_script(
-            'simulator', '--ros-args', '-r', f'__ns:={ns}_bad', '--params-file', str(bad))
-        assert proc.wait(timeout=30) == 2
-        assert 'invalid configuration' in proc.output and reason in proc.output
+        started.append((text, reason, ros_processes.start_console_script(
+            'simulator', '--ros-args', '-r', f'__ns:={ns}_bad{k}', '--params-file', str(bad))))
+    for text, reason, proc in started:
+        assert proc.wait(timeout=30) == 2, (text, proc.output)
+        assert 'invalid configuration' in proc.output and reason in proc.output, text
 
 
 def test_frequency_estimate_from_the_motion_matches_eq28_and_is_nan_at_rest(
