@@ -180,15 +180,6 @@ class SampleMessages:
                                       fields['f2'])
 
 
-def channel_variance(noise) -> float:
-    """The variance a channel's noise adds about its bias (NoiseParams), units^2.
-
-    The white noise's, the dynamic bias's stationary one and the rounding's (precision^2
-    / 12); the run's constant bias and mean are not in it.
-    """
-    return noise.stddev ** 2 + noise.dynamic_bias_std ** 2 + noise.precision ** 2 / 12.0
-
-
 class RigMessages:
     """The rig sensors' messages of one rod: tip/imu, hub/encoder, rod/strain.
 
@@ -217,7 +208,7 @@ class RigMessages:
             imu.orientation.x = imu.orientation.y = imu.orientation.z = 0.0
             imu.orientation.w = 1.0
         for name in ('linear_acceleration', 'angular_velocity'):
-            variance = channel_variance(getattr(sensors, name))
+            variance = getattr(sensors, name).variance
             setattr(imu, f'{name}_covariance', [variance, 0.0, 0.0, 0.0, variance, 0.0,
                                                 0.0, 0.0, variance])
         self.orientation = sensors.orientation

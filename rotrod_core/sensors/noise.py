@@ -102,6 +102,17 @@ class NoiseParams:
             return 0.0
         return self.dynamic_bias_stddev * math.sqrt(self.dynamic_bias_correlation_time / 2)
 
+    @property
+    def variance(self) -> float:
+        """The variance the noise adds about the run's bias, units^2 (0 when off).
+
+        The white noise's, the dynamic bias's stationary one and the rounding's
+        (precision^2 / 12); the run's constant bias and mean are not in it.
+        """
+        if self.off:
+            return 0.0
+        return self.stddev ** 2 + self.dynamic_bias_std ** 2 + self.precision ** 2 / 12.0
+
 
 class NoiseChannel:
     """The noise of one channel over a run (see the module's formula).

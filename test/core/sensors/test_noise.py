@@ -25,6 +25,20 @@ def test_no_noise_reads_the_true_value_exactly():
     assert math.isnan(nan)
 
 
+def test_the_variance_about_the_bias_is_the_readings_variance_and_zero_when_off():
+    """NoiseParams.variance (what tip/imu's covariance reports) against the readings: a
+    run's white noise, stationary dynamic bias and rounding together (its dynamic bias
+    started stationary: the mean of many runs' variances); 0 for type none."""
+    params = NoiseParams(type='gaussian_quantized', stddev=0.1, dynamic_bias_stddev=0.4,
+                         dynamic_bias_correlation_time=0.02, precision=0.2)
+    expected = 0.1**2 + (0.4 * math.sqrt(0.01)) ** 2 + 0.2**2 / 12
+    assert params.variance == pytest.approx(expected, rel=1e-12)
+    y = read(params, value=0.0, dt=0.01)            # 10,000 samples, 5,000 bias times
+    assert np.var(y) == pytest.approx(expected, rel=0.1)
+    assert NoiseParams(type='none', stddev=1.0, precision=0.5).variance == 0.0
+    assert NoiseParams().variance == 0.0
+
+
 def test_white_noise_has_the_mean_and_standard_deviation_asked():
     y = read(NoiseParams(mean=0.05, stddev=0.2))
     assert np.std(y) == pytest.approx(0.2, rel=0.03)                # the issue's 3 %
