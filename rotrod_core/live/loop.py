@@ -840,7 +840,7 @@ class RealTimeLoop(Generic[SettingsT]):
     def _samples(self) -> list[Sample]:
         """Every running rod's sample of now (a halted rod's too while others run)."""
         engines = self.world.engines
-        markers = self._markers_due(engines) if self.settings.markers else {}
+        markers = self._markers_due(engines) if self.settings.markers else set()
         t = self.world.time
         due = self._pacer.wall_time(t) if self._pacer.paced and not self.paused else None
         stamp = self._stamps.stamp(t)

@@ -193,7 +193,8 @@ class _Group:
         """Take a step of dt (s) at each of ``times`` (their ends) under ``rows``."""
         if self.servo:          # the PI loop's integral, from the rods and back
             self._integral = self._column([e._servo_integral for e in self.engines])
-        self._stick = self.coulomb * dt / self.inertia
+        if self.friction:       # Karnopp's band: a step of Coulomb friction's speed
+            self._stick = self.coulomb * dt / self.inertia
         if self.single:
             records = [self._run_one(_values(rows[0], times).tolist(), dt)]
         elif self.drive == 'velocity':
@@ -206,6 +207,16 @@ class _Group:
                                                else self._integral[i])
         return records
 
+    def _velocity_torque(self, state, omega_dot):
+        """The ideal velocity drive's torque, N m, at ``state`` (its w the target).
+
+        What imposes w' on the coupled rod, and what overcomes the bearing.
+        """
+        torque = model.hub_torque(self.co, state, omega_dot, self.coupling)
+        if self.friction:
+            torque = torque + overcome_friction(self.viscous, self.coulomb, state[5])
+        return torque
+
     def _step(self, state, value, dt: float):
         """One step of every rod: (new state, w', torque) under ``value`` per rod."""
         if self.drive == 'velocity':
@@ -213,10 +224,7 @@ class _Group:
             u, v, du, dv, theta, _ = rk4_step_prescribed_rotation(self._accelerations, state,
                                                                    dt, wd)
             new = (u, v, du, dv, theta, value)     # the drive imposes w: exactly its target
-            torque = model.hub_torque(self.co, new, wd, self.coupling)
-            if self.friction:
-                torque = torque + overcome_friction(self.viscous, self.coulomb, value)
-            return new, wd, torque
+            return new, wd, self._velocity_torque(new, wd)
         applied = value                           # torque drive: the commanded torque
         if self.servo:                             # servo: the PI loop's, from w now
             applied, self._integral = servo_torque(self.kp, self.ki, self.max_torque,
@@ -306,9 +314,7 @@ class _Group:
                 theta = theta + turn[k]
                 xs[k], thetas[k] = x, theta
             new = (xs[:, 0], xs[:, 1], xs[:, 2], xs[:, 3], thetas, target)
-            torque = model.hub_torque(self.co, new, wd, self.coupling)
-            if self.friction:
-                torque = torque + overcome_friction(self.viscous, self.coulomb, target)
+            torque = self._velocity_torque(new, wd)
             r = np.hypot(new[0], new[1])
             out_steps = np.stack([*new, wd, torque, r], axis=1)   # (steps, 9, rods)
             finite = np.isfinite(out_steps[:, :8].sum(axis=1))
