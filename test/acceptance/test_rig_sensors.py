@@ -15,6 +15,7 @@ from node_probes import (
     stamp,
     start_simulator,
 )
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from reference import I_AREA, LOAD_RADIUS_RIG, R0, W0_RIG, E, L, M
 from ros_harness import ros_arguments
 from rotrod_interfaces.msg import RigEstimate
@@ -135,14 +136,20 @@ def test_noise_at_rest_has_its_parameters_statistics_over_10000_samples(
     constant within the run and drawn about +-bias_mean; the gyroscope's dynamic bias has
     the Gauss-Markov autocorrelation exp(-dt / tau) (tau within 10 %) and stationary
     standard deviation sigma sqrt(tau / 2) (within 10 %); the bridge's moments are whole
-    multiples of their precision. The covariances are the noise's."""
+    multiples of their precision. The covariances are the noise's. The IMU is subscribed
+    reliable KEEP_ALL, so the simulator (as fast as possible) waits for it: the 10,000
+    samples are consecutive, 10 ms apart (the autocorrelation is of neighbours)."""
     ns = namespace(request)
     start_simulator(ros_processes, ns, real_time_factor=0.0, wait_for_subscribers=0,
                     **NOISE)
-    imu = ros_node.subscribe(f'{ns}/tip/imu', Imu, qos=1000)
+    lossless = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+    imu = ros_node.subscribe(f'{ns}/tip/imu', Imu, qos=lossless)
     strain = ros_node.subscribe(f'{ns}/rod/strain', WrenchStamped, qos=1000)
     ros_node.spin_until(lambda: len(imu) >= 10000 and len(strain) >= 100, 60,
                         '10000 IMU samples')
+    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
+                       for m in imu[:10000]])
+    assert np.all(np.abs(np.diff(stamps) - 0.01) < 1e-6)               # consecutive
     accel, gyro = readings(imu[:10000])
     for axis in range(3):
         x = accel[:, axis]
