@@ -203,13 +203,21 @@ class SimulatorNode(Node):
                               stagger=self._rods_added)
             self._rods_added += 1
             self.rods[name] = io
+            self._pace_looks()
         io.publish_description(config, self.settings.disk_radius)
         return io
+
+    def _pace_looks(self) -> None:
+        """Every rod's period of looks for subscribers, for the world's size now."""
+        every = rod_io.look_period(len(self.rods))
+        for io in self.rods.values():
+            io.look_every = every
 
     def remove_rod(self, name: str) -> None:
         """A rod leaves the world (between steps): its goals end, its interfaces go."""
         with self.loop.lock:
             io = self.rods.pop(name)
+            self._pace_looks()
             engine = self.world.remove(name)
             engine._end_goals('INVALID_GOAL', 'the rod was deleted')
             self.loop._report_outcomes_of(engine)
@@ -369,8 +377,9 @@ class SimulatorNode(Node):
             self._io['/clock'].publish(messages.clock(messages.stamp(s.stamp)))
         io = self.rods.get(s.rod)
         if io is not None:                    # not deleted since the sample was taken
-            self._extras.append((io, io.publish(s, settings, config,
-                                                estimators.get(s.rod))))
+            extras = io.publish(s, settings, config, estimators.get(s.rod))
+            if s.markers or extras[-1] is not None:       # markers, or an estimator
+                self._extras.append((io, extras))
 
     def _publish_extras(self) -> None:
         """Every rod's estimate and markers of the instant, after all its samples."""

@@ -324,6 +324,21 @@ class OmegaSetpointShaper:
         t = finite_number('time', t)
         return self._ramp_at(t).omega(t)
 
+    def held(self, t: float) -> float | None:
+        """The constant w (rad/s) from time ``t`` (s) on, else None.
+
+        Constant when every ramp has ended by then: a rod holding its speed, most blocks.
+        """
+        ramps = self._ramps
+        if len(ramps) == 1 and t >= ramps[0].times[-1]:
+            return ramps[0].omegas[-1]
+        return None
+
+    @property
+    def ramp_count(self) -> int:
+        """How many ramps are kept (one: the one in force; more: some may be dropped)."""
+        return len(self._ramps)
+
     def segment(self, t_first: float, t_last: float) -> tuple | None:
         """The one linear piece of w(t) over [t_first, t_last] (s), if one covers it.
 

@@ -325,6 +325,7 @@ class _Deflections(NamedTuple):
 
     r: np.ndarray
     r_max: float
+    r_min: float
 
 
 class SimulationEngine:
@@ -528,9 +529,12 @@ class SimulationEngine:
         self._finite('angular momentum', L)
         return L
 
-    def frequencies(self) -> tuple:
-        """Dynamic frequencies (f1, f2) in Hz at the current w (Eq. 28 or eigen analysis)."""
-        w = self.state.omega
+    def frequencies(self, omega: float | None = None) -> tuple:
+        """Dynamic frequencies (f1, f2) in Hz of the rod in use (Eq. 28 or eigen analysis).
+
+        At w = ``omega`` rad/s (default: the current w).
+        """
+        w = self.state.omega if omega is None else omega
         if self._w0 is not None:
             return eq28(self._w0, w)
         f = self._frequencies.get(w)
@@ -799,6 +803,9 @@ class SimulationEngine:
                 taus = np.where(times >= ex.end - 1e-9 * dt, ex.trajectory.end_time,
                                 times - ex.start)
                 return np.asarray(ex.trajectory.omega(taus), dtype=float)
+            held = self._shaper.held(t0 + dt)
+            if held is not None:
+                return held
             piece = self._shaper.segment(t0 + dt, t0 + steps * dt)
             if piece is not None:
                 return piece
@@ -829,7 +836,8 @@ class SimulationEngine:
             return
         if self.execution is not None and n:
             self._track(self._omega_dot)
-        self._shaper.forget_before(self.time)    # a 10 kHz stream leaves a ramp per setpoint
+        if self._shaper.ramp_count > 1:         # a 10 kHz stream leaves a ramp per setpoint
+            self._shaper.forget_before(self.time)
 
     def _halt(self, t: float, reason: int, refused: tuple, drive_value: float) -> None:
         """Halt at the last good state: the step ending at ``t`` (s) was refused."""
@@ -853,17 +861,19 @@ class SimulationEngine:
     def _watch_block(self, record, t0: float) -> None:
         """:meth:`_watch_deflection` over a block's steps from ``t0`` (s).
 
-        ``record``: its ``r`` (the deflection at each step, m) and ``r_max``.
+        ``record``: its ``r`` (the deflection at each step, m), ``r_max`` and ``r_min``.
         """
-        dt, r_max = self.config.dt, record.r_max
+        dt, r_max, limit = self.config.dt, record.r_max, self.config.deflection_limit
         if r_max > self.peak_deflection:
             i = int(np.argmax(record.r))
             self.peak_deflection, self.peak_deflection_at = r_max, t0 + (i + 1) * dt
-        if r_max <= self.config.deflection_limit:
+        if r_max <= limit:
             self.beyond_limit_since = None
             return
+        if record.r_min > limit and self.beyond_limit_since is not None:
+            return                  # beyond it all along: no crossing, still beyond since
         r = record.r
-        above = r > self.config.deflection_limit
+        above = r > limit
         times = t0 + dt * np.arange(1, len(r) + 1)
         before = np.concatenate(([self.beyond_limit_since is not None], above[:-1]))
         starts = np.flatnonzero(above & ~before)
@@ -878,7 +888,7 @@ class SimulationEngine:
 
     def _watch_deflection(self, r: float) -> None:
         """Follow the critical-deflection criterion: crossings, and the peak so far."""
-        self._watch_block(_Deflections(np.array([r]), r), self.time - self.config.dt)
+        self._watch_block(_Deflections(np.array([r]), r, r), self.time - self.config.dt)
 
     def _own_world(self) -> World:
         if len(self.world) != 1:

@@ -54,7 +54,7 @@ from rotrod_core.live.lockstep import (
 )
 from rotrod_core.live.pacing import Pacer, StampClock
 from rotrod_core.live.world import World
-from rotrod_core.model.equations import State
+from rotrod_core.model.equations import Coefficients, State
 from rotrod_core.numerics.checks import finite_number
 
 MAX_BACKLOG = 1.0
@@ -174,8 +174,8 @@ class Sample(NamedTuple):
     """Stamp time, s: epoch time in real time, simulated time with a published clock."""
     state: State
     torque: float
-    frequencies: tuple
-    position: tuple
+    coefficients: Coefficients
+    """The rod's coefficients at the sample (what its position and sensors read)."""
     markers: bool
     tracking: Tracking | None = None
     """The executing trajectory's desired and actual hub state (None: no goal)."""
@@ -844,9 +844,10 @@ class RealTimeLoop(Generic[SettingsT]):
         t = self.world.time
         due = self._pacer.wall_time(t) if self._pacer.paced and not self.paused else None
         stamp = self._stamps.stamp(t)
-        return [Sample(due, t, stamp, eng.state, eng.torque, eng.frequencies(),
-                       eng.inertial_position(), name in markers, eng.tracking(), name,
-                       eng.omega_dot)
+        # what only some subscribers read (the tip's position, the frequencies) is
+        # computed from the sample where it is published, not here for every rod
+        return [Sample(due, t, stamp, eng.state, eng.torque, eng.coefficients,
+                       name in markers, eng.tracking(), name, eng.omega_dot)
                 for name, eng in self.world.engines.items()]
 
     def _tick(self) -> tuple[list, float | None]:

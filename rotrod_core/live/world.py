@@ -100,17 +100,19 @@ class BlockRecord:
 
     ``taken`` steps were good; ``rejected`` is (reason, the refused state, drive value)
     of the step after them, if one was refused. ``last`` holds the last good step's
-    (u, v, u', v', theta, w, w', torque); ``r_max`` the largest deflection
-    sqrt(u^2 + v^2) over the block (m, 0 without steps), and :attr:`r` each step's
-    (read only where needed: a crossing of the critical deflection).
+    (u, v, u', v', theta, w, w', torque); ``r_max`` and ``r_min`` the largest and the
+    smallest deflection sqrt(u^2 + v^2) over the block (m, 0 without steps), and
+    :attr:`r` each step's (read only where needed: a crossing of the critical
+    deflection).
     """
 
-    __slots__ = ('_steps', '_index', 'last', 'r_max', 'taken', 'rejected')
+    __slots__ = ('_steps', '_index', 'last', 'r_max', 'r_min', 'taken', 'rejected')
 
     def __init__(self, steps: np.ndarray, index: int, taken: int, rejected, last,
-                 r_max: float):
+                 r_max: float, r_min: float):
         self._steps, self._index = steps, index        # (steps, 9, rods): the group's
-        self.taken, self.rejected, self.last, self.r_max = taken, rejected, last, r_max
+        self.taken, self.rejected, self.last = taken, rejected, last
+        self.r_max, self.r_min = r_max, r_min
 
     @property
     def r(self) -> np.ndarray:
@@ -145,16 +147,23 @@ def _records(out: np.ndarray, bad: np.ndarray, finite: np.ndarray,
     """
     steps, _, n = out.shape
     last = out[-1, :8, :].T.tolist()
-    r_max = out[:, 8, :].max(axis=0).tolist()
-    records = [BlockRecord(out, i, steps, None, last[i], r_max[i]) for i in range(n)]
+    r = out[:, 8, :]
+    r_max, r_min = r.max(axis=0).tolist(), r.min(axis=0).tolist()
+    records = [BlockRecord(out, i, steps, None, last[i], r_max[i], r_min[i])
+               for i in range(n)]
     for i in np.flatnonzero(bad.any(axis=0)).tolist():
         t = int(np.argmax(bad[:, i]))
-        reason = NON_FINITE if not finite[t, i] else TOO_FAR if far[t, i] else TOO_FAST
-        records[i] = BlockRecord(
-            out, i, t, (reason, tuple(out[t, :6, i].tolist()), float(out[t, 7, i])),
-            out[t - 1, :8, i].tolist() if t else None,
-            float(out[:t, 8, i].max()) if t else 0.0)
+        records[i] = _cut(out, i, t,
+                          NON_FINITE if not finite[t, i] else TOO_FAR if far[t, i] else TOO_FAST)
     return records
+
+
+def _cut(out: np.ndarray, i: int, t: int, reason: int) -> BlockRecord:
+    """Rod ``i``'s record of a block whose step ``t`` was refused for ``reason``."""
+    good = out[:t, 8, i]
+    return BlockRecord(out, i, t, (reason, tuple(out[t, :6, i].tolist()), float(out[t, 7, i])),
+                       out[t - 1, :8, i].tolist() if t else None,
+                       float(good.max()) if t else 0.0, float(good.min()) if t else 0.0)
 
 
 class _Group:
@@ -271,7 +280,8 @@ class _Group:
             rows.append((*new, wd, drive, r))
         steps = np.array(rows, dtype=float).reshape(len(rows), 9)[:, :, None]
         return BlockRecord(steps, 0, len(rows), rejected, rows[-1][:8] if rows else None,
-                           max((row[8] for row in rows), default=0.0))
+                           max((row[8] for row in rows), default=0.0),
+                           min((row[8] for row in rows), default=0.0))
 
     def _run_prescribed(self, inputs: np.ndarray, dt: float) -> list[BlockRecord]:
         """The block of several rods whose hub speed is prescribed (velocity drive).
@@ -364,13 +374,20 @@ class _Group:
             state = new
             rows.append((*new, wd, np.broadcast_to(drive, (n,)), r))
         out = np.array(rows)                                  # (steps, 9, rods)
-        r_max = out[:, 8, :].max(axis=0).tolist()
+        r = out[:, 8, :]
+        r_max, r_min = r.max(axis=0).tolist(), r.min(axis=0).tolist()
         last = out[-1, :8, :].T.tolist()
         records = []
         for i in range(n):
             t = int(taken[i])
-            row = last[i] if t == steps else (out[t - 1, :8, i].tolist() if t else None)
-            records.append(BlockRecord(out, i, t, rejected[i], row, r_max[i]))
+            if t == steps:
+                records.append(BlockRecord(out, i, t, None, last[i], r_max[i], r_min[i]))
+                continue
+            good = out[:t, 8, i]
+            records.append(BlockRecord(out, i, t, rejected[i],
+                                       out[t - 1, :8, i].tolist() if t else None,
+                                       float(good.max()) if t else 0.0,
+                                       float(good.min()) if t else 0.0))
         return records
 
     def _refuse(self, k: int, state, new, wd, drive, r, alive, taken, rejected):

@@ -111,3 +111,11 @@ def test_publishers_made_together_look_for_subscribers_at_their_own_phase(monkey
     assert [k for k, phase in looked if phase == 0.5] == [0, 15, 25, 35]
     with pytest.raises(ValueError, match='phase'):
         KeepAllPublishing({}, Logger(), lambda: True, lambda: True, phase=1.0)
+
+
+def test_a_large_world_s_rods_look_less_often_so_that_its_looks_cost_twenty_rods_looks():
+    from rotrod_ros.rod_io import LOOK, LOOK_RODS, look_period
+    assert look_period(1) == look_period(LOOK_RODS) == LOOK == 0.1
+    for rods in (21, 40, 100):                  # looks per second of the whole world
+        assert rods / look_period(rods) == pytest.approx(LOOK_RODS / LOOK)
+    assert look_period(100) == pytest.approx(0.5)

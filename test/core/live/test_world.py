@@ -218,3 +218,34 @@ def test_a_trajectory_ends_at_its_last_point_s_speed_exactly_whatever_its_start(
             world.advance(block)
         assert rod.trajectory_outcomes[-1].code == 'SUCCESSFUL', offset
         assert rod.state.omega == 1.0, offset
+
+
+def test_the_critical_deflection_watch_counts_the_same_crossings_whatever_the_block():
+    """Rods that cross the 3 mm criterion once and stay beyond, or oscillate about it
+    (25 crossings), stepped a step at a time or in blocks of 10 and 64 (whose steps are
+    then all beyond it, or all below): the same crossings, the same first crossing and
+    "beyond since", the same peak (times and deflections to rounding)."""
+    def watched(block):
+        world = World(1000.0)
+        engines = [SimulationEngine(EngineConfig(params=RodParams(damping_ratio=0.01)),
+                                    world=world, name=f'rod{i}') for i in range(6)]
+        for i, engine in enumerate(engines):
+            engine.command_omega(2.0 + 0.1 * i)
+        done = 0
+        while done < 20000:
+            done += world.advance(min(block, 20000 - done))
+        return [(e.limit_crossings, e.first_crossed_at, e.beyond_limit_since,
+                 e.peak_deflection, e.peak_deflection_at) for e in engines]
+
+    one = watched(1)
+    counts = [w[0] for w in one]
+    assert max(counts) >= 20 and counts.count(1) >= 3       # oscillating; once and beyond
+    assert sum(w[2] is not None for w in one) >= 4          # still beyond at the end
+    for block in (10, 64):
+        for a, b in zip(watched(block), one):
+            assert a[0] == b[0] and (a[2] is None) == (b[2] is None)
+            assert a[1] == pytest.approx(b[1], abs=1e-9)
+            assert a[3] == pytest.approx(b[3], rel=1e-9)
+            assert a[4] == pytest.approx(b[4], abs=1e-9)
+            if b[2] is not None:
+                assert a[2] == pytest.approx(b[2], abs=1e-9)
