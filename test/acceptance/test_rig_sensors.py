@@ -194,9 +194,12 @@ def test_a_full_reset_replays_every_sensor_bit_for_bit_in_lockstep(
         reply = ros_node.call_service(StepSimulation, f'{node}/step_simulation',
                                       StepSimulation.Request(steps=500), timeout=30)
         assert reply.result.result == reply.result.RESULT_OK, reply.result.error_message
-        ros_node.spin_until(lambda: all(len(v) >= 50 for v in got.values()), 10,
-                            '50 samples each')
+        # t = 0, 0.01, ..., 0.5 s: 51 samples each, however late they arrive (a sample
+        # still on its way after a fixed wait was read as a different replay)
+        ros_node.spin_until(lambda: all(len(v) >= 51 for v in got.values()), 30,
+                            '51 samples each')
         ros_node.spin_for(0.3)
+        assert [len(v) for v in got.values()] == [51, 51, 51]
         imu = readings(got['imu'])
         strain = [(m.wrench.torque.x, m.wrench.torque.y) for m in got['strain']]
         encoder = [(m.position[0], m.velocity[0]) for m in got['encoder']]
