@@ -197,6 +197,7 @@ def test_a_standard_client_steps_resets_replays_plays_and_spawns_rods(ros_proces
 
 
 @pytest.mark.long      # builds simulation_interfaces once more (minutes; then cached)
+@pytest.mark.timeout(900)   # the build's minutes, beside the soak in .ci/run, not 300 s
 def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes,
                                                                         tmp_path):
     build = build_interfaces
