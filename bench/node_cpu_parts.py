@@ -11,7 +11,9 @@ calling thread), so the parts add up to the thread's CPU time less what runs out
 them (the loop itself). Each timer costs about a microsecond per call, which the
 thread's total includes.
 
-Run it where something subscribes to the node's topics (``bench_realtime.py`` does,
+With ``rods:=N`` the timers are on every rod of the world, and ``publish: a rod's
+sample, all of it`` times each rod's whole publication (its messages, sends, looks and
+sensors). Run it where something subscribes to the node's topics (``bench_realtime.py`` does,
 from another process): without a matched reader, DDS does less per publication.
 Prints {"thread_percent": ..., "parts": {name: {"percent": ..., "calls": ...,
 "us_per_call": ...}}, "duration_s": ...} on stdout. What the parts showed, and what was
@@ -78,18 +80,25 @@ def measure(duration: float, params: dict) -> dict:
     try:
         node = simulator.SimulatorNode(parameter_overrides=[
             Parameter(k, value=v) for k, v in values.items()])
-        loop, rod = node.loop, node.rods['']     # the simulator's one rod, as started
+        loop = node.loop
+        rods = list(node.rods.values())         # the simulator's rods, as started
+        rod = rods[0]
         _timed(node.world, 'advance', 'physics steps', spent, calls)
+        _timed(loop, '_publish', 'publish: a rod\'s sample, all of it', spent, calls)
+        _timed(loop, '_published_hook', 'publish: estimates and markers', spent, calls)
         _timed(loop, 'report', 'status check and /diagnostics', spent, calls)
         _timed(loop, '_samples', 'sample (frequencies, position)', spent, calls)
         _timed(loop, '_apply_commands', 'commands', spent, calls)
         _timed(loop.clock, 'sleep_until', 'waits to each due time', spent, calls)
-        _timed(rod.keep_all, 'send', 'publish: sample topics', spent, calls)
-        _timed(rod.marker_frames, 'frame', 'markers: message', spent, calls)
-        _timed(rod.io['markers'], 'publish', 'markers: publish', spent, calls)
-        estimator = rod.observation.estimator
-        if estimator is not None:
-            _timed(estimator, 'push', 'whirl estimate', spent, calls)
+        for rod in rods:
+            _timed(rod.keep_all, 'send', 'publish: sample topics', spent, calls)
+            _timed(rod.keep_all, 'look', 'publish: looks for subscribers', spent, calls)
+            _timed(rod, '_publish_sensors', 'publish: rig sensors', spent, calls)
+            _timed(rod.marker_frames, 'frame', 'markers: message', spent, calls)
+            _timed(rod.io['markers'], 'publish', 'markers: publish', spent, calls)
+            estimator = rod.observation.estimator
+            if estimator is not None:
+                _timed(estimator, 'push', 'whirl estimate', spent, calls)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         node.start()
