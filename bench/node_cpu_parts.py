@@ -11,12 +11,16 @@ calling thread), so the parts add up to the thread's CPU time less what runs out
 them (the loop itself). Each timer costs about a microsecond per call, which the
 thread's total includes.
 
-With ``rods:=N`` the timers are on every rod of the world, and ``publish: a rod's
-sample, all of it`` times each rod's whole publication (its messages, sends, looks and
-sensors). Run it where something subscribes to the node's topics (``bench_realtime.py`` does,
+With ``rods:=N`` the timers are on every rod of the world. Timers that enclose parts
+are reported apart, under "wholes": each rod's whole sample publication (its messages,
+sends, looks and sensors), its rig sensors read and sent, and the pass of estimates and
+markers after an instant's samples.
+
+Run it where something subscribes to the node's topics (``bench_realtime.py`` does,
 from another process): without a matched reader, DDS does less per publication.
 Prints {"thread_percent": ..., "parts": {name: {"percent": ..., "calls": ...,
-"us_per_call": ...}}, "duration_s": ...} on stdout. What the parts showed, and what was
+"us_per_call": ...}}, "wholes": {...}, "duration_s": ...} on stdout. What the parts
+showed, and what was
 made cheaper: docs/realtime.md#node-cpu.
 """
 
@@ -84,16 +88,20 @@ def measure(duration: float, params: dict) -> dict:
         rods = list(node.rods.values())         # the simulator's rods, as started
         rod = rods[0]
         _timed(node.world, 'advance', 'physics steps', spent, calls)
-        _timed(loop, '_publish', 'publish: a rod\'s sample, all of it', spent, calls)
-        _timed(loop, '_published_hook', 'publish: estimates and markers', spent, calls)
+        # enclosing timers (their parts are timed inside them too): apart
+        whole: Counter = Counter()
+        whole_calls: Counter = Counter()
+        _timed(loop, '_publish', "a rod's sample publication, all of it", whole, whole_calls)
+        _timed(loop, '_published_hook', 'the estimates and markers pass', whole, whole_calls)
         _timed(loop, 'report', 'status check and /diagnostics', spent, calls)
-        _timed(loop, '_samples', 'sample (frequencies, position)', spent, calls)
+        _timed(loop, '_samples', "the instant's samples (state, torque, tracking)", spent, calls)
         _timed(loop, '_apply_commands', 'commands', spent, calls)
         _timed(loop.clock, 'sleep_until', 'waits to each due time', spent, calls)
         for rod in rods:
             _timed(rod.keep_all, 'send', 'publish: sample topics', spent, calls)
             _timed(rod.keep_all, 'look', 'publish: looks for subscribers', spent, calls)
-            _timed(rod, '_publish_sensors', 'publish: rig sensors', spent, calls)
+            _timed(rod, '_publish_sensors', 'the rig sensors, read and sent', whole,
+                   whole_calls)
             _timed(rod.marker_frames, 'frame', 'markers: message', spent, calls)
             _timed(rod.io['markers'], 'publish', 'markers: publish', spent, calls)
             estimator = rod.observation.estimator
@@ -105,8 +113,8 @@ def measure(duration: float, params: dict) -> dict:
         started = time.monotonic()
         while time.monotonic() < started + 3.0:
             executor.spin_once(timeout_sec=0.1)
-        spent.clear()
-        calls.clear()
+        for counter in (spent, calls, whole, whole_calls):
+            counter.clear()
         tid = loop._thread.native_id
         c0, t0 = _thread_cpu(tid), time.monotonic()
         while time.monotonic() < t0 + duration:
@@ -116,10 +124,12 @@ def measure(duration: float, params: dict) -> dict:
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
+    def table(spent, calls):
+        return {k: {'percent': 100 * v / wall, 'calls': calls[k],
+                    'us_per_call': 1e6 * v / max(calls[k], 1)}
+                for k, v in sorted(spent.items(), key=lambda kv: -kv[1])}
     return {'duration_s': wall, 'thread_percent': 100 * (c1 - c0) / wall,
-            'parts': {k: {'percent': 100 * v / wall, 'calls': calls[k],
-                          'us_per_call': 1e6 * v / max(calls[k], 1)}
-                      for k, v in sorted(spent.items(), key=lambda kv: -kv[1])}}
+            'parts': table(spent, calls), 'wholes': table(whole, whole_calls)}
 
 
 def main(argv: list[str]) -> int:
