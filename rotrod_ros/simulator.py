@@ -377,8 +377,9 @@ class SimulatorNode(Node):
             self._io['/clock'].publish(messages.clock(messages.stamp(s.stamp)))
         io = self.rods.get(s.rod)
         if io is not None:                    # not deleted since the sample was taken
-            extras = io.publish(s, settings, config, estimators.get(s.rod))
-            if s.markers or extras[-1] is not None:       # markers, or an estimator
+            estimator = estimators.get(s.rod)
+            extras = io.publish(s, settings, config, estimator)
+            if s.markers or estimator is not None:      # an extras pass has work for it
                 self._extras.append((io, extras))
 
     def _publish_extras(self) -> None:

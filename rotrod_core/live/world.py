@@ -153,16 +153,19 @@ def _records(out: np.ndarray, bad: np.ndarray, finite: np.ndarray,
                for i in range(n)]
     for i in np.flatnonzero(bad.any(axis=0)).tolist():
         t = int(np.argmax(bad[:, i]))
+        reason = NON_FINITE if not finite[t, i] else TOO_FAR if far[t, i] else TOO_FAST
         records[i] = _cut(out, i, t,
-                          NON_FINITE if not finite[t, i] else TOO_FAR if far[t, i] else TOO_FAST)
+                          (reason, tuple(out[t, :6, i].tolist()), float(out[t, 7, i])))
     return records
 
 
-def _cut(out: np.ndarray, i: int, t: int, reason: int) -> BlockRecord:
-    """Rod ``i``'s record of a block whose step ``t`` was refused for ``reason``."""
+def _cut(out: np.ndarray, i: int, t: int, rejected: tuple) -> BlockRecord:
+    """Rod ``i``'s record of a block whose step ``t`` was refused.
+
+    ``rejected``: as :class:`BlockRecord` holds it; the good steps are those before ``t``.
+    """
     good = out[:t, 8, i]
-    return BlockRecord(out, i, t, (reason, tuple(out[t, :6, i].tolist()), float(out[t, 7, i])),
-                       out[t - 1, :8, i].tolist() if t else None,
+    return BlockRecord(out, i, t, rejected, out[t - 1, :8, i].tolist() if t else None,
                        float(good.max()) if t else 0.0, float(good.min()) if t else 0.0)
 
 
@@ -377,18 +380,9 @@ class _Group:
         r = out[:, 8, :]
         r_max, r_min = r.max(axis=0).tolist(), r.min(axis=0).tolist()
         last = out[-1, :8, :].T.tolist()
-        records = []
-        for i in range(n):
-            t = int(taken[i])
-            if t == steps:
-                records.append(BlockRecord(out, i, t, None, last[i], r_max[i], r_min[i]))
-                continue
-            good = out[:t, 8, i]
-            records.append(BlockRecord(out, i, t, rejected[i],
-                                       out[t - 1, :8, i].tolist() if t else None,
-                                       float(good.max()) if t else 0.0,
-                                       float(good.min()) if t else 0.0))
-        return records
+        return [BlockRecord(out, i, steps, None, last[i], r_max[i], r_min[i])
+                if taken[i] == steps else _cut(out, i, int(taken[i]), rejected[i])
+                for i in range(n)]
 
     def _refuse(self, k: int, state, new, wd, drive, r, alive, taken, rejected):
         """Freeze the rods whose step ``k`` was refused at their last good ``state``."""

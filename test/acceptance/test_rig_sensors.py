@@ -3,12 +3,12 @@ against closed forms of the rotating rod, the noise's own statistics, and a full
 replay (issue 37)."""
 
 import math
-import time
 
 import numpy as np
 import pytest
 from geometry_msgs.msg import WrenchStamped
 from node_probes import (
+    drain,
     namespace,
     omega_publisher,
     param,
@@ -120,17 +120,6 @@ NOISE = {'imu.linear_acceleration.stddev': 0.05, 'imu.linear_acceleration.bias_m
          'imu.angular_velocity.dynamic_bias_correlation_time': 0.02,
          'strain.stddev': 1e-3, 'strain.type': 'gaussian_quantized', 'strain.precision': 1e-3,
          'noise_seed': 7}
-
-
-def settle(ros_node, *received, quiet=0.3, timeout=10.0):
-    """Spin until none of the ``received`` lists grew for ``quiet`` s (what was on its way
-    has come, however late), at most ``timeout`` s."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        counts = [len(r) for r in received]
-        ros_node.spin_for(quiet)
-        if [len(r) for r in received] == counts:
-            return
 
 
 def readings(imu):
@@ -263,7 +252,8 @@ def test_the_imu_publishes_at_imu_rate_on_the_samples_instants(
                                       timeout=30)
         assert reply.result.result == reply.result.RESULT_OK, reply.result.error_message
         ros_node.spin_until(lambda: len(joints) >= round(seconds * 100), 10, 'the samples')
-        settle(ros_node, imu, joints)
+        drain(ros_node, joints)
+        drain(ros_node, imu)
         times = [stamp(m) for m in imu]
         assert set(by_stamp(imu)) <= set(by_stamp(joints))      # on the samples' instants
         return times, [stamp(m) for m in joints]
