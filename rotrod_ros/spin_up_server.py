@@ -99,8 +99,8 @@ class SpinUpServer:
                                         'rad/s; ready for goals')
         self.omega = w = float(msg.velocity[i])
         run = self.run
-        if run is None or run.started is None:
-            return
+        if run is None:           # from the goal's start w on: the simulator starts the
+            return                # trajectory on acceptance, before this node's tick knows
         t = to_seconds(msg.header.stamp)
         if run.moved is None and w != run.omega_start:
             run.moved = t
@@ -112,7 +112,7 @@ class SpinUpServer:
         u, v = float(msg.vector.x), float(msg.vector.y)
         self.deflection = math.hypot(u, v)
         run = self.run
-        if run is not None and run.started is not None:
+        if run is not None:
             run.samples.append((to_seconds(msg.header.stamp), u, v))
             run.peak = max(run.peak, self.deflection)
 
