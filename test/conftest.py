@@ -8,7 +8,10 @@ Importing the hooks and fixtures below registers them for every test under ``tes
 * ``pytest_runtest_makereport``: stops a failing test's processes and adds their output to
   the failure report;
 * fixtures ``ros_processes`` (start/stop node processes) and ``ros_node`` (an rclpy node in
-  the test process).
+  the test process);
+* fixture ``colcon_interfaces``: the repository and its three message packages built by
+  colcon once per session (test/colcon_workspace.py), for the tests that check that
+  build and those that talk through it.
 
 Plans (``rotrod_core.command.plan_cache``) are cached for the run in a temporary
 directory of its own (``ROTROD_PLAN_CACHE``, inherited by child processes): each
@@ -25,6 +28,7 @@ import re
 import shutil
 import tempfile
 
+import colcon_workspace
 import pytest
 import ros_harness
 from ros_harness import (  # noqa: F401 (registered by pytest through this module)
@@ -50,6 +54,13 @@ def pytest_unconfigure(config):
     if folder:
         shutil.rmtree(folder, ignore_errors=True)
     ros_harness.pytest_unconfigure(config)
+
+
+@pytest.fixture(scope='session')
+def colcon_interfaces(tmp_path_factory):
+    """``colcon build`` of the sources and the message packages (a
+    :class:`colcon_workspace.ColconBuild`; minutes: tests using it are ``long``)."""
+    return colcon_workspace.build_with_interfaces(tmp_path_factory.mktemp('colcon') / 'ws')
 
 
 def pytest_collection_modifyitems(config, items):

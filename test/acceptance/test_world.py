@@ -310,7 +310,7 @@ def test_set_entity_state_moves_a_hub_and_a_tip_and_the_rod_goes_on_from_there(
         ros_processes, ros_node, request):
     ns = namespace(request)
     start_simulator(ros_processes, ns, 'table1.yaml', markers=False, estimate_window=0.0,
-                    start_paused=True)
+                    start_paused=True, real_time_factor=4.0)
     sim = f'{ns}/rotrod_simulator'
     damped = urdf('--damping-ratio', '0.1')
     assert spawn(ros_node, sim, 'far', damped, x=1.0).result.result == Result.RESULT_OK

@@ -38,14 +38,12 @@ from pathlib import Path
 
 import pytest
 import setup_py
+from colcon_workspace import BUILD_TIMEOUT, PACKAGE, copy_sources, tail
 from interface_tools import build_interfaces
 
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[2]
-PACKAGE = 'rotrod'
-EXCLUDED_DIRS = {'.git', '.venv', 'build', 'install', 'log', '__pycache__', '.pytest_cache',
-                 '.ruff_cache', '.hypothesis'}
 
 
 def declared_console_scripts() -> dict:
@@ -63,24 +61,6 @@ def parse_entry_points(lines) -> dict:
         assert name.strip() not in out, f'duplicate console script {name.strip()!r}'
         out[name.strip()] = re.sub(r'\s+', '', target)
     return out
-
-
-def source_files() -> list:
-    """Repository files a checkout would contain (relative paths)."""
-    try:
-        proc = subprocess.run(
-            ['git', 'ls-files', '-z', '--cached', '--others', '--exclude-standard'],
-            cwd=ROOT, capture_output=True, check=True, timeout=60)
-        files = [f for f in proc.stdout.decode().split('\0') if f]
-    except (OSError, subprocess.CalledProcessError):
-        # Not a git checkout (e.g. a source archive): everything but build products.
-        files = []
-        for dirpath, dirnames, filenames in os.walk(ROOT):
-            dirnames[:] = [d for d in dirnames
-                           if d not in EXCLUDED_DIRS and not d.endswith('.egg-info')]
-            rel = Path(dirpath).relative_to(ROOT)
-            files += [str(rel / f) for f in filenames if not f.endswith('.pyc')]
-    return [f for f in files if (ROOT / f).is_file()]
 
 
 def environment_from_install(prefix: Path, base: dict) -> dict:
@@ -112,21 +92,13 @@ def environment_from_install(prefix: Path, base: dict) -> dict:
     return env
 
 
-def _tail(text: str, n: int = 60) -> str:
-    return '\n'.join(text.splitlines()[-n:])
-
-
 @pytest.fixture(scope='module')
 def colcon_install(tmp_path_factory):
     """Build into a temporary workspace once per module; return its facts."""
     tmp = tmp_path_factory.mktemp('colcon')
     ws = tmp / 'ws'
-    src = ws / 'src' / PACKAGE
-    files = source_files()
+    files = copy_sources(ws)
     assert 'package.xml' in files and 'setup.py' in files
-    for rel in files:
-        (src / rel).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(ROOT / rel, src / rel)
 
     colcon = Path(sys.executable).parent / 'colcon'
     if not colcon.exists():
@@ -143,7 +115,7 @@ def colcon_install(tmp_path_factory):
                           check=False)
     build_seconds = time.monotonic() - t0
     output = proc.stdout + proc.stderr
-    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
+    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{tail(output)}'
 
     setuptools_version = metadata.version('setuptools')
     print(f'colcon build: {build_seconds:.1f} s with setuptools {setuptools_version}')
@@ -299,35 +271,21 @@ def test_console_scripts_installed_and_run(colcon_install):
 
 
 @pytest.mark.long      # minutes (cmake and the rosidl generators): .ci/run runs it
-# the build's own limit (its subprocess's 900 s), not pytest.ini's 300 s per test: the four
-# packages took 365 s here with the machine idle (control_msgs' C and C++ typesupports)
-@pytest.mark.timeout(900)
-def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
+# the session's build (colcon_workspace.BUILD_TIMEOUT), not pytest.ini's 300 s per test
+@pytest.mark.timeout(BUILD_TIMEOUT + 60)
+def test_colcon_builds_the_interface_packages_beside_rotrod(colcon_interfaces, tmp_path):
     """``colcon build --base-paths src src/rotrod/rotrod_interfaces
-    src/rotrod/simulation_interfaces src/rotrod/control_msgs`` (docs/usage.md): the four
-    packages, those rotrod depends on before it, with this venv as the ROS install (its
-    ament and rosidl build wheels, cmake and ninja, as tools/build_interfaces.py sets
-    them up); the installed messages import from the install tree and serialize."""
-    ws = tmp_path / 'ws'
-    src = ws / 'src' / PACKAGE
-    for rel in source_files():
-        (src / rel).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(ROOT / rel, src / rel)
-    venv = Path(sys.prefix)
-    env = dict(os.environ, COLCON_HOME=str(tmp_path / 'colcon_home'),
-               PATH=f'{venv / "bin"}{os.pathsep}{os.environ.get("PATH", "")}',
-               AMENT_PREFIX_PATH=str(venv), CMAKE_PREFIX_PATH=str(venv))
+    src/rotrod/simulation_interfaces src/rotrod/control_msgs`` (docs/usage.md; the
+    session's build, test/colcon_workspace.py): the four packages, those rotrod depends
+    on before it, with this venv as the ROS install (its ament and rosidl build wheels,
+    cmake and ninja, as tools/build_interfaces.py sets them up); the installed messages
+    import from the install tree and serialize."""
+    build = colcon_interfaces
+    print(f'colcon build of the four packages: {build.seconds:.0f} s')
+    assert build.returncode == 0, \
+        f'colcon build failed ({build.returncode}):\n{tail(build.output)}'
     interfaces = list(build_interfaces.PACKAGES)
-    cmd = [str(venv / 'bin' / 'colcon'), '--log-base', str(ws / 'log'), 'build',
-           '--base-paths', 'src', *(f'src/{PACKAGE}/{name}' for name in interfaces),
-           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
-           '--cmake-args', '-G', 'Ninja', f'-DPython3_EXECUTABLE={sys.executable}',
-           '-DBUILD_TESTING=OFF']
-    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True, timeout=900,
-                          check=False)
-    output = proc.stdout + proc.stderr
-    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{_tail(output)}'
-    order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', output)]
+    order = [m.group(1) for m in re.finditer(r'Finished <<< (\w+)', build.output)]
     assert sorted(order) == sorted([*interfaces, PACKAGE])
     depends = set(re.findall(r'<\w*depend>(\w+)</', (ROOT / 'package.xml').read_text()))
     assert {'rotrod_interfaces', 'simulation_interfaces'} <= depends
@@ -335,7 +293,7 @@ def test_colcon_builds_the_interface_packages_beside_rotrod(tmp_path):
         assert order.index(name) < order.index(PACKAGE), (name, order)
     assert sorted(INSTALLED_PROBES) == sorted(interfaces)
     for name, (code, expected) in INSTALLED_PROBES.items():
-        site, out = _run_from_install(ws / 'install' / name, tmp_path, code)
+        site, out = _run_from_install(build.install(name), tmp_path, code)
         first, second = out.split()
         assert first.startswith(str(site)) and second == expected, name
 

@@ -2,11 +2,11 @@
 
 The client (``test/sim_interfaces_client.py``, a separate process) imports rclpy, std_msgs,
 rosgraph_msgs and ``simulation_interfaces`` only. The default run gives it the venv's
-build of ``simulation_interfaces``; the long run builds the package a second time
-into a prefix of its own (tools/build_interfaces.py --install-prefix, cached while
-its sources are unchanged) and gives the client that one alone, Python modules and
-libraries (checked from the client's /proc/self/maps). Type hashes must then agree
-on the wire, as with any client built against the published package.
+build of ``simulation_interfaces``; the long run gives it the package as colcon
+builds it from the upstream definitions in a workspace of its own (the session's
+build, test/colcon_workspace.py), that one alone, Python modules and libraries
+(checked from the client's /proc/self/maps). Type hashes must then agree on the
+wire, as with any client built against the published package.
 
 The simulator runs at real_time_factor 2 with max_angular_acceleration 2 rad/s^2. The
 client pauses, resets (time 0), commands 2 rad/s, takes 2000 steps by the service and
@@ -32,7 +32,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from interface_tools import build_interfaces
+from colcon_workspace import BUILD_TIMEOUT, tail
 from ros_harness import console_script
 from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
 from simulation_interfaces.srv import SetSimulationState
@@ -60,8 +60,6 @@ FEATURES = {SimulatorFeatures.ENTITY_STATE_GETTING, SimulatorFeatures.SIMULATION
             SimulatorFeatures.ENTITY_INFO_GETTING, SimulatorFeatures.SPAWNABLES,
             SimulatorFeatures.SPAWNING_ENTITIES}
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6          # action_msgs/GoalStatus
-SEPARATE_PREFIX = Path(sys.prefix) / 'test-cache' / 'simulation_interfaces_client'
-"""Where the long test builds the client's own simulation_interfaces (kept while current)."""
 
 
 E, D, L, R0 = 100e9, 0.003, 0.3, 0.1                    # Table 1 (docs/model.md)
@@ -196,21 +194,20 @@ def test_a_standard_client_steps_resets_replays_plays_and_spawns_rods(ros_proces
     assert Path(report['module']).resolve().is_relative_to(venv)
 
 
-@pytest.mark.long      # builds simulation_interfaces once more (minutes; then cached)
-@pytest.mark.timeout(900)   # the build's minutes, beside the soak in .ci/run, not 300 s
-def test_a_client_with_a_separately_built_package_talks_to_the_simulator(ros_processes,
-                                                                        tmp_path):
-    build = build_interfaces
-    build.ensure_built(Path(sys.prefix), package='simulation_interfaces',
-                       install_prefix=SEPARATE_PREFIX, install=False)
-    site = next(SEPARATE_PREFIX.glob('lib/python3*/site-packages'))
-    lib = SEPARATE_PREFIX / 'lib'
+@pytest.mark.long      # the session's colcon build (minutes), .ci/run's builds
+@pytest.mark.timeout(BUILD_TIMEOUT + 300)     # that build, beside the soak in .ci/run
+def test_a_client_with_a_separately_built_package_talks_to_the_simulator(
+        ros_processes, tmp_path, colcon_interfaces):
+    assert colcon_interfaces.returncode == 0, tail(colcon_interfaces.output)
+    separate = colcon_interfaces.install('simulation_interfaces')
+    site = next(separate.glob('lib/python3*/site-packages'))
+    lib = separate / 'lib'
     env = {'PYTHONPATH': os.pathsep.join([str(site), os.environ.get('PYTHONPATH', '')]),
            'LD_LIBRARY_PATH': os.pathsep.join([str(lib),
                                                os.environ.get('LD_LIBRARY_PATH', '')])}
     report = run_client(ros_processes, tmp_path, extra_env=env)
     check_report(report)
-    separate = SEPARATE_PREFIX.resolve()
+    separate = separate.resolve()
     assert Path(report['module']).resolve().is_relative_to(separate)
     assert report['libraries'], 'no simulation_interfaces library mapped'
     for path in report['libraries']:
