@@ -146,3 +146,34 @@ def test_the_checks_catch_a_reversed_arrow_and_a_cycle():
     assert cycles(graph) == [['rotrod_core.numerics.a', 'rotrod_core.reporting.b',
                               'rotrod_core.numerics.a']]
     assert reversed_arrows({'rotrod_core.live.x': {'rotrod_ros.simulator'}})
+
+
+def test_rotrod_cores_public_names_each_load_from_the_module_that_defines_them():
+    """rotrod_core imports its public names on first use (PEP 562): ``__all__``, the
+    table ``__getattr__`` reads and the type checker's imports name the same things,
+    from the same modules, and each name resolves to that module's object."""
+    import importlib
+
+    import rotrod_core
+    tree = ast.parse(Path(rotrod_core.__file__).read_text())
+    typed = {alias.name: node.module for node in ast.walk(tree)
+             if isinstance(node, ast.ImportFrom) for alias in node.names}
+    typed.pop('TYPE_CHECKING')
+    lazy = rotrod_core._MODULE_OF
+    assert sorted(rotrod_core.__all__) == sorted(lazy) == sorted(typed)
+    assert lazy == typed
+    for name, module in lazy.items():
+        assert getattr(rotrod_core, name) is getattr(importlib.import_module(module), name)
+
+
+def test_a_node_importing_the_live_core_does_not_load_the_analyses_scipy():
+    """The simulator's start imports what it runs, not the identification's
+    scipy.signal nor the planner (rotrod_core's names load on first use)."""
+    import subprocess
+    import sys
+    code = ('import sys, rotrod_ros.simulator; '
+            'print(sorted(m for m in ("scipy.signal", "rotrod_core.command.planner", '
+            '"rotrod_core.estimation.identify") if m in sys.modules))')
+    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          cwd=ROOT, timeout=120, check=True)
+    assert done.stdout.strip() == '[]', done.stdout
