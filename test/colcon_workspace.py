@@ -14,6 +14,7 @@ upstream definitions apart from the venv's.
 """
 
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -51,7 +52,6 @@ def source_files() -> list:
 
 def copy_sources(ws: Path) -> list:
     """The repository's files copied to ``<ws>/src/rotrod``; their relative paths."""
-    import shutil
     src = ws / 'src' / PACKAGE
     files = source_files()
     for rel in files:
