@@ -317,12 +317,19 @@ def test_the_rig_monitor_identifies_the_real_rig_from_its_imu_and_encoder(
         assert by_10_s, name
         last = by_10_s[-1]
         assert last.natural_frequency == pytest.approx(W0_RIG, rel=5e-3), name
-        assert last.eccentricity == pytest.approx(LOAD_RADIUS_RIG, rel=5e-2), name
+        # r0 +-5 %: the message says which window gave it (its std: the ramp's window,
+        # carried, ~0.4 % offline over 40 noise draws; a hold's own fit is far looser)
+        assert last.eccentricity == pytest.approx(LOAD_RADIUS_RIG, rel=5e-2), (
+            name, f'r0 {last.eccentricity:.5g} +- {last.eccentricity_std:.2g} m at '
+            f'{stamp(last) - start:.2f} s into the spin-up; every estimate by then (s, r0, '
+            'std): ' + ', '.join(f'({stamp(m) - start:.1f}, {m.eccentricity:.4g}, '
+                                 f'{m.eccentricity_std:.2g})' for m in by_10_s))
         assert last.residual_rms == pytest.approx(0.02 * math.sqrt(2), rel=0.2), name
         print(f'{name}: w0 {last.natural_frequency:.6g} rad/s '
               f'({last.natural_frequency / W0_RIG - 1:+.3%}, std '
               f'{last.natural_frequency_std / W0_RIG:.2%}), r0 {last.eccentricity:.5g} m '
-              f'({last.eccentricity / LOAD_RADIUS_RIG - 1:+.2%}), residual '
+              f'({last.eccentricity / LOAD_RADIUS_RIG - 1:+.2%}, std '
+              f'{last.eccentricity_std / LOAD_RADIUS_RIG:.2%}), residual '
               f'{last.residual_rms:.4g} m/s^2')
         steady = [m for m in got if stamp(m) >= start + 11.0]     # windows of the hold
         assert steady and all(m.natural_frequency == pytest.approx(W0_RIG, rel=5e-3)
