@@ -78,21 +78,33 @@ class ColconBuild:
         return self.ws / 'install' / package
 
 
+def colcon_build(ws: Path, *args: str, base_paths: tuple = ('src',),
+                 env: dict | None = None, timeout: float = BUILD_TIMEOUT) -> ColconBuild:
+    """``colcon build --base-paths *base_paths *args`` in ``ws`` (base paths relative to
+    it), with this interpreter's colcon and a COLCON_HOME of its own (the user's colcon
+    defaults ignored)."""
+    colcon = Path(sys.executable).parent / 'colcon'
+    if not colcon.exists():
+        found = shutil.which('colcon')
+        assert found, 'colcon is not installed (pip install -e ".[dev]")'
+        colcon = Path(found)
+    env = dict(os.environ if env is None else env, COLCON_HOME=str(ws / 'colcon_home'))
+    cmd = [str(colcon), '--log-base', str(ws / 'log'), 'build', '--base-paths', *base_paths,
+           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'), *args]
+    t0 = time.monotonic()
+    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True,
+                          timeout=timeout, check=False)
+    return ColconBuild(ws, proc.returncode, proc.stdout + proc.stderr,
+                       time.monotonic() - t0)
+
+
 def build_with_interfaces(ws: Path) -> ColconBuild:
     """The sources and the three message packages built by colcon in ``ws``."""
     copy_sources(ws)
     venv = Path(sys.prefix)
-    env = dict(os.environ, COLCON_HOME=str(ws / 'colcon_home'),
-               PATH=f'{venv / "bin"}{os.pathsep}{os.environ.get("PATH", "")}',
+    env = dict(os.environ, PATH=f'{venv / "bin"}{os.pathsep}{os.environ.get("PATH", "")}',
                AMENT_PREFIX_PATH=str(venv), CMAKE_PREFIX_PATH=str(venv))
-    cmd = [str(venv / 'bin' / 'colcon'), '--log-base', str(ws / 'log'), 'build',
-           '--base-paths', 'src',
-           *(f'src/{PACKAGE}/{name}' for name in build_interfaces.PACKAGES),
-           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
-           '--cmake-args', '-G', 'Ninja', f'-DPython3_EXECUTABLE={sys.executable}',
-           '-DBUILD_TESTING=OFF']
-    t0 = time.monotonic()
-    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True,
-                          timeout=BUILD_TIMEOUT, check=False)
-    return ColconBuild(ws, proc.returncode, proc.stdout + proc.stderr,
-                       time.monotonic() - t0)
+    paths = ('src', *(f'src/{PACKAGE}/{name}' for name in build_interfaces.PACKAGES))
+    return colcon_build(ws, '--cmake-args', '-G', 'Ninja',
+                        f'-DPython3_EXECUTABLE={sys.executable}', '-DBUILD_TESTING=OFF',
+                        base_paths=paths, env=env)

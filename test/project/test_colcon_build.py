@@ -27,7 +27,6 @@ import configparser
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -38,7 +37,7 @@ from pathlib import Path
 
 import pytest
 import setup_py
-from colcon_workspace import BUILD_TIMEOUT, PACKAGE, copy_sources, tail
+from colcon_workspace import BUILD_TIMEOUT, PACKAGE, colcon_build, copy_sources, tail
 from interface_tools import build_interfaces
 
 pytestmark = pytest.mark.slow
@@ -100,25 +99,13 @@ def colcon_install(tmp_path_factory):
     files = copy_sources(ws)
     assert 'package.xml' in files and 'setup.py' in files
 
-    colcon = Path(sys.executable).parent / 'colcon'
-    if not colcon.exists():
-        found = shutil.which('colcon')
-        assert found, 'colcon is not installed (pip install -e ".[dev]")'
-        colcon = Path(found)
-    env = dict(os.environ)
-    env['COLCON_HOME'] = str(tmp / 'colcon_home')  # ignore the user's colcon defaults
-    cmd = [str(colcon), '--log-base', str(ws / 'log'), 'build', '--base-paths', 'src',
-           '--build-base', str(ws / 'build'), '--install-base', str(ws / 'install'),
-           '--event-handlers', 'console_direct+']
-    t0 = time.monotonic()
-    proc = subprocess.run(cmd, cwd=ws, env=env, capture_output=True, text=True, timeout=600,
-                          check=False)
-    build_seconds = time.monotonic() - t0
-    output = proc.stdout + proc.stderr
-    assert proc.returncode == 0, f'colcon build failed ({proc.returncode}):\n{tail(output)}'
+    build = colcon_build(ws, '--event-handlers', 'console_direct+', timeout=600)
+    output = build.output
+    assert build.returncode == 0, \
+        f'colcon build failed ({build.returncode}):\n{tail(output)}'
 
     setuptools_version = metadata.version('setuptools')
-    print(f'colcon build: {build_seconds:.1f} s with setuptools {setuptools_version}')
+    print(f'colcon build: {build.seconds:.1f} s with setuptools {setuptools_version}')
     constraints = ROOT / 'constraints.txt'
     if constraints.is_file():
         pin = re.search(r'^setuptools==(\S+)', constraints.read_text(), re.MULTILINE)
@@ -140,7 +127,7 @@ def colcon_install(tmp_path_factory):
     elsewhere = tmp / 'elsewhere'
     elsewhere.mkdir()
     return {'ws': ws, 'prefix': prefix, 'env': environment_from_install(prefix, base),
-            'cwd': elsewhere, 'seconds': build_seconds}
+            'cwd': elsewhere, 'seconds': build.seconds}
 
 
 PROBE = '''
