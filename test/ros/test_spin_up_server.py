@@ -7,14 +7,14 @@ import pytest
 from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import JointState
 
-from rotrod_ros.messages import HUB_JOINT
+from rotrod_ros.messages import HUB_JOINT, stamp
 from rotrod_ros.spin_up_server import SpinUpServer, _Run
 
 pytestmark = pytest.mark.ros
 
 
 def stamped(msg, t):
-    msg.header.stamp.sec, msg.header.stamp.nanosec = int(t), round(t % 1 * 1e6) * 1000
+    msg.header.stamp = stamp(t)
     return msg
 
 
